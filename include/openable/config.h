@@ -1,0 +1,75 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace openable
+{
+/// Every parameter of the toolbox. The same snake_case keys are used in YAML files, on the command line
+/// (`--set key=value`) and as private ROS parameters of the nodelets. config/default.yaml documents them.
+struct Config
+{
+  // Camera and description.
+  std::string camera_type = "mono";         ///< mono | stereo | panoramic
+  std::string description_type = "global";  ///< global | grid
+  int patch_size = 64;                      ///< side of the square patch each cell is downsampled to (pixels)
+  int grid_x = 1;                           ///< cells across (description_type grid)
+  int grid_y = 1;                           ///< cells down (description_type grid)
+  int panoramas = 6;                        ///< sub-panoramas per panoramic image (camera_type panoramic)
+  bool illumination_invariance = false;     ///< paper Eq. 6 before description (needs colour input)
+  double alpha = 0.47;                      ///< alpha of Eq. 6 (0.47 for KITTI's Flea2, see Eq. 7)
+  std::string descriptor = "LDB";           ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG
+
+  // Matching.
+  int sequence_length = 1;          ///< L: a place is the sequence of the last L frames
+  double threshold = -1.0;          ///< accept a loop when the normalised distance is <= threshold; -1 = off
+  int exclusion_window = 50;        ///< loop-closure mode: the last N frames before the current one are never matched
+  int top_k = 5;                    ///< candidates reported per frame
+  double min_uniqueness = 0.0;      ///< accept only when 1 - best/second best >= this (0 = off)
+  int uniqueness_window = 10;       ///< frames around the best match ignored when looking for the second best
+  bool bidirectional = false;       ///< also match sequences driven in the opposite direction
+  int max_history = 0;              ///< frames kept in the loop-closure history (0 = unbounded)
+
+  // Stereo (camera_type stereo): OpenCV StereoSGBM on the rectified pair, scaled to the input width.
+  int stereo_num_disparities = 64;  ///< disparity search range at 640 px width (multiple of 16 after scaling)
+  int stereo_block_size = 5;        ///< SGBM block size (odd, pixels)
+
+  // Display.
+  int color_map = 7;  ///< OpenABLE's 12 colour maps (0..11, OpenCV COLORMAP_AUTUMN .. COLORMAP_HOT)
+
+  /// Errors of the form "key: value 'x' is not allowed; expected ...". Empty when valid.
+  std::vector<std::string> validate() const;
+  /// Throws openable::Error with every validation error joined, when there are any.
+  void validateOrThrow() const;
+
+  /// Sets one key from its text form (as in YAML or `--set key=value`). Throws Error for an unknown key
+  /// (listing the known ones) or a value of the wrong type. Does not validate ranges: call validate().
+  void set(const std::string& key, const std::string& value);
+  /// The text form of one key's value. Throws Error for an unknown key.
+  std::string get(const std::string& key) const;
+
+  /// Reads every key present in a YAML mapping; unknown keys are an error. Throws Error.
+  static Config fromYamlFile(const std::string& path);
+  static Config fromYamlString(const std::string& yaml);
+  /// The whole configuration as YAML (used to stamp saved maps and outputs).
+  std::string toYaml() const;
+
+  /// Keys whose change alters the descriptors (a map built with other values is incompatible).
+  static const std::vector<std::string>& descriptorKeys();
+
+  struct Key
+  {
+    std::string name;
+    std::string type;  ///< bool | int | double | string
+    std::string description;
+  };
+  /// Every key, in documentation order.
+  static const std::vector<Key>& keys();
+
+  bool isBinaryDescriptor() const;
+};
+
+/// Paper Eq. 7: alpha from the peak spectral responses (nm) of the red, green and blue channels.
+double alphaFromWavelengths(double lambda_red, double lambda_green, double lambda_blue);
+
+}  // namespace openable

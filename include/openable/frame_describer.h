@@ -1,0 +1,93 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "openable/config.h"
+#include "openable/descriptor.h"
+#include "openable/preprocessor.h"
+
+namespace openable
+{
+/// How one frame's descriptor is laid out in memory: `cells` cell descriptors of `cell_words` 64-bit words
+/// each, grouped into `blocks` equal blocks (sub-panoramas; 1 otherwise). Binary cells hold bits; float
+/// cells hold `cell_length` floats (two per word), scaled to unit length.
+struct DescriptorLayout
+{
+  bool binary = true;
+  int cell_length = 0;  ///< bits or floats per cell
+  int cell_words = 0;   ///< 64-bit words per cell
+  int cells = 1;
+  int blocks = 1;
+
+  int frameWords() const
+  {
+    return cell_words * cells;
+  }
+  int blockWords() const
+  {
+    return frameWords() / blocks;
+  }
+  /// Largest distance between two cells (bits for binary, kFloatScale for float).
+  uint32_t maxCellDistance() const;
+  /// Largest frame distance: the normalisation of every distance the library reports.
+  uint64_t maxFrameDistance() const
+  {
+    return uint64_t(maxCellDistance()) * cells;
+  }
+  bool operator==(const DescriptorLayout& o) const
+  {
+    return binary == o.binary && cell_length == o.cell_length && cell_words == o.cell_words && cells == o.cells &&
+           blocks == o.blocks;
+  }
+  bool operator!=(const DescriptorLayout& o) const
+  {
+    return !(*this == o);
+  }
+};
+
+/// Float cell distances are the L2 distance of unit vectors (0..2) scaled to integers 0..kFloatScale, so
+/// that sequence sums are exact integer arithmetic for every descriptor.
+constexpr uint32_t kFloatScale = 1u << 15;
+
+/// One frame's descriptor: frameWords() words.
+using FrameDescriptor = std::vector<uint64_t>;
+
+/// Image -> patches -> descriptors, as the configuration says.
+class FrameDescriber
+{
+public:
+  /// Validates the config and builds the extractor. Throws Error.
+  explicit FrameDescriber(const Config& config);
+
+  const DescriptorLayout& layout() const
+  {
+    return layout_;
+  }
+  const Preprocessor& preprocessor() const
+  {
+    return preprocessor_;
+  }
+  const DescriptorExtractor& extractor() const
+  {
+    return *extractor_;
+  }
+
+  /// Describes patches as returned by the preprocessor (exactly layout().cells of them).
+  FrameDescriptor describe(const std::vector<Patch>& patches) const;
+  void describe(const std::vector<Patch>& patches, uint64_t* out) const;
+
+  /// Shorthand: preprocess + describe one mono or panoramic image.
+  FrameDescriptor describeImage(const cv::Mat& image) const;
+
+private:
+  Config config_;
+  Preprocessor preprocessor_;
+  std::unique_ptr<DescriptorExtractor> extractor_;
+  DescriptorLayout layout_;
+};
+
+}  // namespace openable

@@ -1,0 +1,32 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "openable/frame_describer.h"
+
+namespace openable
+{
+/// Distance between two frame descriptors (integers, 0 = identical, at most layout.maxFrameDistance()).
+/// Binary: Hamming (Eq. 4). Float: per-cell L2 (Eq. 8) of unit vectors, scaled to integers.
+/// Panoramic layouts (blocks > 1): the minimum, over circular shifts s of the sub-panoramas, of the summed
+/// block distances d(a_b, b_{(b+s) mod blocks}): one consistent shift for the whole panorama.
+class FrameMetric
+{
+public:
+  explicit FrameMetric(const DescriptorLayout& layout);
+
+  const DescriptorLayout& layout() const
+  {
+    return layout_;
+  }
+  uint32_t distance(const uint64_t* a, const uint64_t* b, int* shift = nullptr) const;
+  /// out[i] = distance(query, rows + i * frameWords()) for i < count.
+  void row(const uint64_t* query, const uint64_t* rows, size_t count, uint32_t* out) const;
+
+private:
+  uint32_t blockDistance(const uint64_t* a, const uint64_t* b) const;
+  DescriptorLayout layout_;
+};
+
+}  // namespace openable

@@ -1,0 +1,39 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace openable
+{
+/// Hamming distance kernels. Every kernel returns exactly the same numbers; the fastest one the CPU
+/// supports is chosen at run time.
+enum class HammingKernel
+{
+  kPortable,         ///< plain C++ bit counting (SWAR), any CPU
+  kPopcnt,           ///< the POPCNT instruction, one 64-bit word at a time
+  kAvx2,             ///< AVX2 nibble lookup (vpshufb) with horizontal sums
+  kAvx512Vpopcntdq,  ///< AVX-512 VPOPCNTDQ
+};
+
+std::string kernelName(HammingKernel kernel);
+/// Kernels this CPU can run, slowest first.
+std::vector<HammingKernel> supportedKernels();
+/// The kernel used by the functions without a kernel argument.
+HammingKernel bestKernel();
+
+/// popcount(a XOR b) over `words` 64-bit words.
+uint32_t hamming(const uint64_t* a, const uint64_t* b, size_t words);
+uint32_t hamming(HammingKernel kernel, const uint64_t* a, const uint64_t* b, size_t words);
+
+/// out[i] = hamming(query, rows + i * stride, words) for i < count. Rows are `stride` words apart.
+void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size_t words, size_t count,
+                uint32_t* out);
+void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* rows, size_t stride, size_t words,
+                size_t count, uint32_t* out);
+
+/// Euclidean distance between two float vectors.
+float l2Distance(const float* a, const float* b, size_t length);
+
+}  // namespace openable

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace openable
+{
+/// A sequence of images from a folder (png / jpg / jpeg / bmp / ppm / pgm, sorted by file name) or a
+/// video file.
+class ImageSource
+{
+public:
+  /// Throws Error when the path does not exist, holds no image, or the video cannot be opened.
+  explicit ImageSource(const std::string& path);
+  ~ImageSource();
+
+  /// Frames in the source (for videos, as reported by the container; may be approximate).
+  size_t size() const;
+  bool isVideo() const;
+
+  /// Reads the next frame into `image` and names it in `name` (file name, or "frame_N" for videos).
+  /// Returns false at the end. An unreadable file gives an empty image with its name: the caller reports
+  /// and skips it.
+  bool next(cv::Mat& image, std::string& name);
+
+  /// Image file names of a folder, sorted (empty for a video).
+  const std::vector<std::string>& files() const
+  {
+    return files_;
+  }
+
+private:
+  std::string path_;
+  std::vector<std::string> files_;
+  size_t next_index_ = 0;
+  struct Video;
+  std::unique_ptr<Video> video_;
+};
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so readers see the
+/// old file or the whole new one, never a partial one. Throws Error.
+void writeFileAtomically(const std::string& path, const std::string& bytes);
+
+}  // namespace openable

@@ -1,0 +1,17 @@
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace openable
+{
+/// Writes a 2-D CV_32F matrix as a NumPy .npy file (version 1.0, '<f4', C order), atomically
+/// (temporary file + rename). Throws Error.
+void writeNpy(const std::string& path, const cv::Mat& matrix);
+
+/// Reads a 2-D .npy file of little-endian float32 or float64 (C order) into a CV_32F matrix.
+/// Throws Error naming what is wrong (missing, not .npy, unsupported dtype / order / rank, truncated).
+cv::Mat readNpy(const std::string& path);
+
+}  // namespace openable

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs the Debian packages openable_ros needs to build, test and run the demo.
+# Runs apt-get update once, and only when something is missing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config git
+  catkin ros-base-dev ros-message-generation libnodeletlib-dev pluginlib-dev libcv-bridge-dev
+  libimage-transport-dev libmessage-filters-dev libtf2-ros-dev libtf2-geometry-msgs-dev librosbag-dev
+  librostest-dev python3-rostest python3-roslaunch python3-rosmaster python3-rosbag rosbash rosout
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
+  python3-sensor-msgs python3-std-msgs python3-geometry-msgs python3-nav-msgs python3-stereo-msgs
+  python3-visualization-msgs python3-diagnostic-msgs python3-tf2-msgs python3-std-srvs python3-numpy
+  libsensor-msgs-dev libstereo-msgs-dev libnav-msgs-dev libvisualization-msgs-dev libdiagnostic-msgs-dev
+  libgeometry-msgs-dev libstd-srvs-dev libtf2-msgs-dev
+  libopencv-dev libyaml-cpp-dev libeigen3-dev libceres-dev libgtest-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install_deps: all ${#packages[@]} Debian packages already installed"
+  exit 0
+fi
+
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+echo "install_deps: installing ${#missing[@]} missing packages: ${missing[*]}"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install_deps: done"
