@@ -1,0 +1,261 @@
+// NumPy .npy reader and writer for the 2-D float matrices the toolbox exchanges with Python.
+// Format reference: numpy/lib/format.py (magic, version, little-endian header length, Python dict
+// literal padded so the data starts on a 64-byte boundary).
+#include "openable/npy.h"
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "openable/error.h"
+#include "openable/image_source.h"
+
+namespace openable
+{
+namespace
+{
+const char kMagic[] = "\x93NUMPY";
+const size_t kMagicSize = 6;
+// Data must start on a multiple of this many bytes (numpy >= 1.14 writes 64 for memory mapping).
+const size_t kAlignment = 64;
+
+bool isLittleEndianHost()
+{
+  const uint16_t probe = 1;
+  unsigned char first = 0;
+  std::memcpy(&first, &probe, 1);
+  return first == 1;
+}
+
+std::string readWholeFile(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+  {
+    throw Error("npy: cannot open '" + path + "' for reading (missing or unreadable)");
+  }
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+uint32_t readLittleEndian(const std::string& bytes, size_t offset, size_t width)
+{
+  uint32_t value = 0;
+  for (size_t i = 0; i < width; ++i)
+  {
+    value |= static_cast<uint32_t>(static_cast<unsigned char>(bytes[offset + i])) << (8 * i);
+  }
+  return value;
+}
+
+/// The value text of `key` in the header dict, e.g. "'<f4'" or "(3, 4)"; throws when absent.
+std::string dictValue(const std::string& header, const std::string& key, const std::string& path)
+{
+  const std::string quoted_single = "'" + key + "'";
+  const std::string quoted_double = "\"" + key + "\"";
+  size_t pos = header.find(quoted_single);
+  size_t key_size = quoted_single.size();
+  if (pos == std::string::npos)
+  {
+    pos = header.find(quoted_double);
+    key_size = quoted_double.size();
+  }
+  if (pos == std::string::npos)
+  {
+    throw Error("npy: '" + path + "' header has no '" + key + "' entry: " + header);
+  }
+  size_t colon = header.find(':', pos + key_size);
+  if (colon == std::string::npos)
+  {
+    throw Error("npy: '" + path + "' header is malformed near '" + key + "': " + header);
+  }
+  size_t begin = header.find_first_not_of(" \t", colon + 1);
+  if (begin == std::string::npos)
+  {
+    throw Error("npy: '" + path + "' header is malformed near '" + key + "': " + header);
+  }
+  // A tuple value contains commas, so it ends at its closing parenthesis, anything else at a comma.
+  size_t end = header[begin] == '(' ? header.find(')', begin) : header.find_first_of(",}", begin);
+  if (end == std::string::npos)
+  {
+    throw Error("npy: '" + path + "' header is malformed near '" + key + "': " + header);
+  }
+  if (header[begin] == '(')
+  {
+    ++end;
+  }
+  std::string value = header.substr(begin, end - begin);
+  value.erase(value.find_last_not_of(" \t") + 1);
+  return value;
+}
+
+std::vector<uint64_t> parseShape(const std::string& tuple, const std::string& path)
+{
+  if (tuple.size() < 2 || tuple.front() != '(' || tuple.back() != ')')
+  {
+    throw Error("npy: '" + path + "' has a malformed shape " + tuple);
+  }
+  std::vector<uint64_t> dims;
+  std::stringstream items(tuple.substr(1, tuple.size() - 2));
+  std::string item;
+  while (std::getline(items, item, ','))
+  {
+    const size_t first = item.find_first_not_of(" \t");
+    if (first == std::string::npos)
+    {
+      continue;  // the trailing comma of a 1-tuple "(5,)"
+    }
+    item = item.substr(first, item.find_last_not_of(" \t") - first + 1);
+    if (item.find_first_not_of("0123456789") != std::string::npos || item.size() > 18)
+    {
+      throw Error("npy: '" + path + "' has a malformed shape " + tuple);
+    }
+    dims.push_back(std::stoull(item));
+  }
+  return dims;
+}
+
+struct NpyHeader
+{
+  std::string descr;
+  bool fortran_order = false;
+  std::vector<uint64_t> shape;
+  size_t data_offset = 0;
+};
+
+NpyHeader parseHeader(const std::string& bytes, const std::string& path)
+{
+  if (bytes.size() < kMagicSize + 4 || bytes.compare(0, kMagicSize, kMagic, kMagicSize) != 0)
+  {
+    throw Error("npy: '" + path + "' is not a .npy file (no \\x93NUMPY magic)");
+  }
+  const int major = static_cast<unsigned char>(bytes[6]);
+  // Version 1 stores the header length in 2 bytes; versions 2 and 3 in 4 (3 only changes the encoding).
+  if (major < 1 || major > 3)
+  {
+    throw Error("npy: '" + path + "' has unsupported format version " + std::to_string(major) +
+                " (expected 1, 2 or 3)");
+  }
+  const size_t width = major == 1 ? 2 : 4;
+  if (bytes.size() < 8 + width)
+  {
+    throw Error("npy: '" + path + "' is truncated inside its header");
+  }
+  const size_t header_size = readLittleEndian(bytes, 8, width);
+  NpyHeader header;
+  header.data_offset = 8 + width + header_size;
+  if (bytes.size() < header.data_offset)
+  {
+    throw Error("npy: '" + path + "' is truncated inside its header (" + std::to_string(bytes.size()) +
+                " bytes, header ends at " + std::to_string(header.data_offset) + ")");
+  }
+  const std::string dict = bytes.substr(8 + width, header_size);
+  header.descr = dictValue(dict, "descr", path);
+  header.fortran_order = dictValue(dict, "fortran_order", path) == "True";
+  header.shape = parseShape(dictValue(dict, "shape", path), path);
+  return header;
+}
+
+void checkSupported(const NpyHeader& header, const std::string& path)
+{
+  if (header.descr != "'<f4'" && header.descr != "'<f8'")
+  {
+    throw Error("npy: '" + path + "' has dtype " + header.descr +
+                "; only little-endian float32 '<f4' and float64 '<f8' are supported");
+  }
+  if (header.fortran_order)
+  {
+    throw Error("npy: '" + path + "' is in Fortran order; save it in C order (numpy.ascontiguousarray)");
+  }
+  if (header.shape.size() != 2)
+  {
+    throw Error("npy: '" + path + "' has " + std::to_string(header.shape.size()) +
+                " dimensions; a 2-D matrix is expected");
+  }
+  if (header.shape[0] > static_cast<uint64_t>(INT32_MAX) || header.shape[1] > static_cast<uint64_t>(INT32_MAX))
+  {
+    throw Error("npy: '" + path + "' has a shape too large for a matrix");
+  }
+}
+
+std::string makeHeader(int rows, int cols)
+{
+  std::string dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(rows) + ", " +
+                     std::to_string(cols) + "), }";
+  // Pad with spaces and end with a newline so magic + version + length + dict is a multiple of 64.
+  const size_t prefix = kMagicSize + 2 + 2;
+  const size_t unpadded = prefix + dict.size() + 1;
+  dict.append((kAlignment - unpadded % kAlignment) % kAlignment, ' ');
+  dict.push_back('\n');
+  if (dict.size() > UINT16_MAX)
+  {
+    throw Error("npy: header too long");
+  }
+  std::string header(kMagic, kMagicSize);
+  header.push_back('\x01');
+  header.push_back('\x00');
+  header.push_back(static_cast<char>(dict.size() & 0xff));
+  header.push_back(static_cast<char>((dict.size() >> 8) & 0xff));
+  return header + dict;
+}
+
+}  // namespace
+
+void writeNpy(const std::string& path, const cv::Mat& matrix)
+{
+  if (matrix.type() != CV_32FC1 || matrix.dims != 2)
+  {
+    throw Error("npy: cannot write '" + path + "': a 2-D single-channel CV_32F matrix is expected (got type " +
+                std::to_string(matrix.type()) + ", " + std::to_string(matrix.dims) + " dimensions)");
+  }
+  if (!isLittleEndianHost())
+  {
+    throw Error("npy: writing '<f4' on a big-endian host is not supported");
+  }
+  std::string bytes = makeHeader(matrix.rows, matrix.cols);
+  const size_t row_bytes = static_cast<size_t>(matrix.cols) * sizeof(float);
+  bytes.reserve(bytes.size() + row_bytes * static_cast<size_t>(matrix.rows));
+  // Row by row because a ROI view of a bigger matrix is not continuous.
+  for (int r = 0; r < matrix.rows; ++r)
+  {
+    bytes.append(reinterpret_cast<const char*>(matrix.ptr<float>(r)), row_bytes);
+  }
+  writeFileAtomically(path, bytes);
+}
+
+cv::Mat readNpy(const std::string& path)
+{
+  if (!isLittleEndianHost())
+  {
+    throw Error("npy: reading little-endian data on a big-endian host is not supported");
+  }
+  const std::string bytes = readWholeFile(path);
+  const NpyHeader header = parseHeader(bytes, path);
+  checkSupported(header, path);
+  const int rows = static_cast<int>(header.shape[0]);
+  const int cols = static_cast<int>(header.shape[1]);
+  const size_t item = header.descr == "'<f4'" ? 4 : 8;
+  // Checked against the file size before allocating, so a corrupt shape cannot ask for terabytes.
+  const uint64_t expected = header.shape[0] * header.shape[1] * item;
+  const uint64_t available = bytes.size() - header.data_offset;
+  if (available != expected)
+  {
+    throw Error("npy: '" + path + "' holds " + std::to_string(available) + " data bytes but its shape (" +
+                std::to_string(rows) + ", " + std::to_string(cols) + ") needs " + std::to_string(expected) +
+                (available < expected ? " (truncated)" : " (trailing garbage)"));
+  }
+  cv::Mat matrix(rows, cols, CV_32F);
+  const char* data = bytes.data() + header.data_offset;
+  if (item == 4)
+  {
+    std::memcpy(matrix.data, data, expected);
+    return matrix;
+  }
+  cv::Mat wide(rows, cols, CV_64F);
+  std::memcpy(wide.data, data, expected);
+  wide.convertTo(matrix, CV_32F);
+  return matrix;
+}
+
+}  // namespace openable

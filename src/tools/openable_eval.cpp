@@ -1,0 +1,385 @@
+// openable_eval: precision-recall of distance matrices against a ground truth (see --help).
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "openable/error.h"
+#include "openable/evaluation.h"
+#include "openable/image_source.h"
+#include "openable/npy.h"
+
+namespace
+{
+namespace fs = std::filesystem;
+
+const char kUsage[] = R"(openable_eval: precision-recall of OpenABLE distance matrices against a ground truth.
+
+Usage:
+  openable_eval --matrix PATH [--name LABEL] [--matrix PATH --name LABEL ...]
+                [--mask FILE | --mask-dark IMAGES]
+                (--tolerance T | --pairs FILE [--pair-tolerance K] | --poses FILE [--distance D] [--exclusion E])
+                --output DIR [--title TEXT]
+  openable_eval --poses FILE --compare FILE [--distance D] [--exclusion E] [--sweep]
+
+Distance matrix:
+  --matrix PATH        distance_matrix.npy (float32 or float64, 2-D, rows = queries, columns = references),
+                       or a folder holding one (as written by openable_offline). Repeat it, each with a
+                       --name, to overlay several matrices in one plot. NaN or infinite cells are "not
+                       compared"; a row without any finite cell is a query without prediction. A matrix
+                       of one sequence against itself must hold NaN where the detector did not look
+                       (the frame itself and its recent past), or the frame will match itself.
+  --name LABEL         label of the preceding --matrix in the plot and the JSON (default: the folder or
+                       file name).
+  --mask FILE          query mask: one line per query row, 1 = evaluated, 0 = left out (# comments).
+  --mask-dark IMAGES   compute the mask from the query images (folder or video, in row order): frames with
+                       mean intensity < 10 are left out (e.g. Nordland tunnels); written to
+                       DIR/query_mask.txt.
+
+Ground truth (exactly one):
+  --tolerance T        aligned traversals: query i matches reference j when |i - j| <= T (frames).
+  --pairs FILE         'i j' lines (0-based; frame i closes a loop with earlier frame j; # comments), as in
+                       the published KITTI loop ground truth; a 'shape=RxC' comment fixes the matrix shape.
+  --pair-tolerance K   with --pairs: query i also matches references within K frames of j (default 0).
+  --poses FILE         KITTI poses (row-major 3x4 per line): frame i closes a loop with earlier frame j
+                       when they are closer than D metres and more than E frames apart.
+  --distance D         with --poses: metres (default 5).
+  --exclusion E        with --poses: frames (default 50). The defaults reproduce the published ground
+                       truth of KITTI 00, 05 and 06 best (doc/results.md).
+
+Output:
+  --output DIR         created if missing; receives pr_curve.csv (threshold,precision,recall; with several
+                       matrices pr_curve_LABEL.csv each), pr_curve.png (the PR plot) and metrics.json.
+  --title TEXT         plot title (default "Precision-recall").
+
+Printed on stdout, one per line: auc, max_recall_at_100_precision, recall_at_1 (preceded by 'name: LABEL'
+with several matrices), then the metrics as one line of JSON.
+  auc                  area under the PR curve as step-wise average precision:
+                       sum over thresholds of (recall_k - recall_{k-1}) * precision_k.
+  max_recall_at_100_precision  largest recall of a threshold without any false positive.
+  recall_at_1          fraction of queries with a true match whose best match is a true match.
+A query's prediction is its row's smallest distance; at threshold t it is accepted when distance <= t and
+is a true positive when its column is a true match; every distinct distance is a threshold.
+
+Ground-truth comparison:
+  --compare FILE       with --poses: compare the loops from the poses with a pairs file (pair precision,
+                       recall, intersection over union, and the same for queries with any loop).
+  --sweep              with --compare: try a grid of D and E and print the best by intersection over union.
+
+Exit status: 0 on success, 1 with a one-line reason on stderr for bad input, 2 for bad usage.
+)";
+
+struct UsageError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
+struct Options
+{
+  std::vector<std::string> matrices;
+  std::vector<std::string> names;
+  std::string mask;
+  std::string mask_dark;
+  int tolerance = -1;
+  std::string pairs;
+  int pair_tolerance = 0;
+  std::string poses;
+  double distance = openable::kDefaultLoopDistance;
+  int exclusion = openable::kDefaultLoopExclusion;
+  std::string output;
+  std::string title = "Precision-recall";
+  std::string compare;
+  bool sweep = false;
+  bool help = false;
+};
+
+int parseInt(const std::string& flag, const std::string& text)
+{
+  size_t used = 0;
+  int value = 0;
+  try
+  {
+    value = std::stoi(text, &used);
+  }
+  catch (const std::exception&)
+  {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || value < 0)
+  {
+    throw UsageError(flag + " expects a non-negative integer, got '" + text + "'");
+  }
+  return value;
+}
+
+double parsePositive(const std::string& flag, const std::string& text)
+{
+  size_t used = 0;
+  double value = 0.0;
+  try
+  {
+    value = std::stod(text, &used);
+  }
+  catch (const std::exception&)
+  {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !(value > 0.0) || !std::isfinite(value))
+  {
+    throw UsageError(flag + " expects a positive number, got '" + text + "'");
+  }
+  return value;
+}
+
+/// Takes the next argument as the flag's value.
+std::string takeValue(int argc, char** argv, int& i)
+{
+  if (i + 1 >= argc)
+  {
+    throw UsageError(std::string(argv[i]) + " needs a value");
+  }
+  return argv[++i];
+}
+
+Options parseArguments(int argc, char** argv)
+{
+  Options o;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string flag = argv[i];
+    if (flag == "--help" || flag == "-h")
+      o.help = true;
+    else if (flag == "--matrix")
+      o.matrices.push_back(takeValue(argc, argv, i));
+    else if (flag == "--name")
+    {
+      if (o.names.size() + 1 != o.matrices.size())
+        throw UsageError("--name must follow its --matrix (one name per matrix)");
+      o.names.push_back(takeValue(argc, argv, i));
+    }
+    else if (flag == "--mask")
+      o.mask = takeValue(argc, argv, i);
+    else if (flag == "--mask-dark")
+      o.mask_dark = takeValue(argc, argv, i);
+    else if (flag == "--tolerance")
+      o.tolerance = parseInt(flag, takeValue(argc, argv, i));
+    else if (flag == "--pairs")
+      o.pairs = takeValue(argc, argv, i);
+    else if (flag == "--pair-tolerance")
+      o.pair_tolerance = parseInt(flag, takeValue(argc, argv, i));
+    else if (flag == "--poses")
+      o.poses = takeValue(argc, argv, i);
+    else if (flag == "--distance")
+      o.distance = parsePositive(flag, takeValue(argc, argv, i));
+    else if (flag == "--exclusion")
+      o.exclusion = parseInt(flag, takeValue(argc, argv, i));
+    else if (flag == "--output")
+      o.output = takeValue(argc, argv, i);
+    else if (flag == "--title")
+      o.title = takeValue(argc, argv, i);
+    else if (flag == "--compare")
+      o.compare = takeValue(argc, argv, i);
+    else if (flag == "--sweep")
+      o.sweep = true;
+    else
+      throw UsageError("unknown argument '" + flag + "' (see --help)");
+  }
+  return o;
+}
+
+void checkOptions(const Options& o)
+{
+  const int sources = (o.tolerance >= 0 ? 1 : 0) + (o.pairs.empty() ? 0 : 1) + (o.poses.empty() ? 0 : 1);
+  if (!o.compare.empty())
+  {
+    if (o.poses.empty() || !o.matrices.empty() || sources != 1)
+      throw UsageError("--compare needs --poses and no --matrix, --tolerance or --pairs");
+    return;
+  }
+  if (o.sweep)
+    throw UsageError("--sweep needs --poses and --compare");
+  if (o.matrices.empty())
+    throw UsageError("no --matrix given (see --help)");
+  if (sources != 1)
+    throw UsageError("give exactly one ground truth: --tolerance, --pairs or --poses");
+  if (o.output.empty())
+    throw UsageError("no --output folder given");
+  if (!o.mask.empty() && !o.mask_dark.empty())
+    throw UsageError("give --mask or --mask-dark, not both");
+  if (o.matrices.size() > 1 && o.names.size() != o.matrices.size())
+    throw UsageError("with several --matrix, give each a --name");
+  if (std::set<std::string>(o.names.begin(), o.names.end()).size() != o.names.size())
+    throw UsageError("--name labels must differ");
+}
+
+std::string matrixFile(const std::string& path)
+{
+  return fs::is_directory(path) ? (fs::path(path) / "distance_matrix.npy").string() : path;
+}
+
+std::string defaultName(const std::string& path)
+{
+  const fs::path p = fs::path(path).lexically_normal();
+  if (fs::is_directory(p))
+    return p.has_filename() ? p.filename().string() : p.parent_path().filename().string();
+  return p.stem().string();
+}
+
+/// A label usable in a file name: anything but letters, digits, '-', '_' and '.' becomes '_'.
+std::string fileSafe(const std::string& name)
+{
+  std::string safe = name;
+  for (char& c : safe)
+  {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.')
+      c = '_';
+  }
+  return safe;
+}
+
+openable::GroundTruth makeGroundTruth(const Options& o, const cv::Mat& matrix)
+{
+  if (o.tolerance >= 0)
+    return openable::alignedGroundTruth(matrix.rows, matrix.cols, o.tolerance);
+  if (!o.pairs.empty())
+    return openable::loadPairsGroundTruth(o.pairs, o.pair_tolerance);
+  return openable::posesGroundTruth(openable::loadKittiPositions(o.poses), o.distance, o.exclusion);
+}
+
+std::vector<bool> makeMask(const Options& o)
+{
+  if (!o.mask.empty())
+    return openable::loadQueryMask(o.mask);
+  if (!o.mask_dark.empty())
+  {
+    std::vector<bool> mask = openable::brightFrameMask(o.mask_dark);
+    openable::saveQueryMask((fs::path(o.output) / "query_mask.txt").string(), mask);
+    return mask;
+  }
+  return {};
+}
+
+void printMetrics(const openable::EvaluationResult& r)
+{
+  std::cout << "auc: " << r.auc << "\n"
+            << "max_recall_at_100_precision: " << r.max_recall_at_100_precision << "\n"
+            << "recall_at_1: " << r.recall_at_1 << "\n";
+}
+
+int evaluate(const Options& o)
+{
+  fs::create_directories(o.output);
+  const std::vector<bool> mask = makeMask(o);
+  std::vector<openable::PrPlotSeries> series;
+  std::string json;
+  const bool several = o.matrices.size() > 1;
+  for (size_t i = 0; i < o.matrices.size(); ++i)
+  {
+    const cv::Mat matrix = openable::readNpy(matrixFile(o.matrices[i]));
+    const openable::GroundTruth truth = makeGroundTruth(o, matrix);
+    const std::string name = i < o.names.size() ? o.names[i] : defaultName(o.matrices[i]);
+    openable::EvaluationResult result = openable::evaluatePrecisionRecall(matrix, truth, mask);
+    const std::string csv_name = several ? "pr_curve_" + fileSafe(name) + ".csv" : "pr_curve.csv";
+    openable::writeFileAtomically((fs::path(o.output) / csv_name).string(), openable::prCurveCsv(result));
+    json += (json.empty() ? "" : ", ") + openable::metricsJson(result, name, truth.description());
+    if (several)
+      std::cout << "name: " << name << "\n";
+    printMetrics(result);
+    series.push_back({ name, std::move(result) });
+  }
+  if (several)
+    json = "[" + json + "]";
+  openable::writeFileAtomically((fs::path(o.output) / "metrics.json").string(), json + "\n");
+  std::vector<unsigned char> png;
+  cv::imencode(".png", openable::drawPrCurves(series, o.title), png);
+  openable::writeFileAtomically((fs::path(o.output) / "pr_curve.png").string(), std::string(png.begin(), png.end()));
+  std::cout << json << std::endl;
+  return 0;
+}
+
+void printAgreement(double distance, int exclusion, const openable::GroundTruthAgreement& a)
+{
+  std::cout << distance << "," << exclusion << "," << a.candidate_pairs << "," << a.reference_pairs << ","
+            << a.common_pairs << "," << a.pairPrecision() << "," << a.pairRecall() << "," << a.pairJaccard() << ","
+            << a.candidate_queries << "," << a.reference_queries << "," << a.common_queries << ","
+            << a.queryJaccard() << "\n";
+}
+
+/// Loops from poses against a published pairs file, at the given D and E or over a grid of them.
+int compareGroundTruth(const Options& o)
+{
+  const std::vector<cv::Vec3d> positions = openable::loadKittiPositions(o.poses);
+  const openable::GroundTruth reference = openable::loadPairsGroundTruth(o.compare);
+  reference.checkFits(static_cast<int>(positions.size()), static_cast<int>(positions.size()));
+  std::cout << "distance,exclusion,pose_pairs,published_pairs,common_pairs,pair_precision,pair_recall,"
+               "pair_iou,pose_queries,published_queries,common_queries,query_iou\n";
+  if (!o.sweep)
+  {
+    printAgreement(o.distance, o.exclusion,
+                   openable::compareGroundTruth(openable::posesGroundTruth(positions, o.distance, o.exclusion),
+                                                reference));
+    return 0;
+  }
+  double best_iou = -1.0, best_distance = 0.0;
+  int best_exclusion = 0;
+  for (double distance = 1.0; distance <= 20.0; distance += 1.0)
+  {
+    for (int exclusion : { 0, 10, 25, 50, 75, 100, 150, 200, 300, 500 })
+    {
+      const openable::GroundTruthAgreement a =
+          openable::compareGroundTruth(openable::posesGroundTruth(positions, distance, exclusion), reference);
+      printAgreement(distance, exclusion, a);
+      if (a.pairJaccard() > best_iou)
+      {
+        best_iou = a.pairJaccard();
+        best_distance = distance;
+        best_exclusion = exclusion;
+      }
+    }
+  }
+  std::cout << "best: distance " << best_distance << " exclusion " << best_exclusion << " pair_iou " << best_iou
+            << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  Options options;
+  try
+  {
+    options = parseArguments(argc, argv);
+    if (options.help || argc == 1)
+    {
+      std::cout << kUsage;
+      return argc == 1 ? 2 : 0;
+    }
+    checkOptions(options);
+  }
+  catch (const UsageError& e)
+  {
+    std::cerr << "openable_eval: " << e.what() << "\n";
+    return 2;
+  }
+  try
+  {
+    return options.compare.empty() ? evaluate(options) : compareGroundTruth(options);
+  }
+  catch (const std::exception& e)
+  {
+    // Error messages of the core are one line naming what and why; keep it one line whatever the source.
+    std::string reason = e.what();
+    for (char& c : reason)
+      c = (c == '\n') ? ' ' : c;
+    std::cerr << "openable_eval: error: " << reason << "\n";
+    return 1;
+  }
+}
