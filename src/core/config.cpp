@@ -1,0 +1,334 @@
+#include "openable/config.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "openable/descriptor.h"
+#include "openable/error.h"
+
+namespace openable
+{
+namespace
+{
+/// One row per key: how to read and write it. Keeping every key in one table means YAML, --set, ROS
+/// parameters and the documentation can never disagree about names or types.
+struct KeyAccess
+{
+  Config::Key key;
+  std::function<void(Config&, const std::string&)> set;
+  std::function<std::string(const Config&)> get;
+};
+
+std::string trim(const std::string& s)
+{
+  const auto begin = s.find_first_not_of(" \t\r\n");
+  if (begin == std::string::npos)
+    return "";
+  const auto end = s.find_last_not_of(" \t\r\n");
+  return s.substr(begin, end - begin + 1);
+}
+
+int parseInt(const std::string& key, const std::string& text)
+{
+  try
+  {
+    size_t used = 0;
+    const long value = std::stol(trim(text), &used);
+    if (used == trim(text).size() && value >= INT32_MIN && value <= INT32_MAX)
+      return static_cast<int>(value);
+  }
+  catch (const std::exception&)
+  {
+  }
+  throw Error(key + ": '" + text + "' is not an integer");
+}
+
+double parseDouble(const std::string& key, const std::string& text)
+{
+  try
+  {
+    size_t used = 0;
+    const double value = std::stod(trim(text), &used);
+    if (used == trim(text).size())
+      return value;
+  }
+  catch (const std::exception&)
+  {
+  }
+  throw Error(key + ": '" + text + "' is not a number");
+}
+
+bool parseBool(const std::string& key, const std::string& text)
+{
+  const std::string t = trim(text);
+  if (t == "true" || t == "True" || t == "TRUE" || t == "1" || t == "yes" || t == "on")
+    return true;
+  if (t == "false" || t == "False" || t == "FALSE" || t == "0" || t == "no" || t == "off")
+    return false;
+  throw Error(key + ": '" + text + "' is not a boolean (true / false)");
+}
+
+std::string formatDouble(double v)
+{
+  std::ostringstream out;
+  out.precision(17);
+  out << v;
+  return out.str();
+}
+
+template <typename T>
+KeyAccess makeKey(const char* name, const char* description, T Config::*member);
+
+template <>
+KeyAccess makeKey<int>(const char* name, const char* description, int Config::*member)
+{
+  return { { name, "int", description },
+           [name, member](Config& c, const std::string& v) { c.*member = parseInt(name, v); },
+           [member](const Config& c) { return std::to_string(c.*member); } };
+}
+
+template <>
+KeyAccess makeKey<double>(const char* name, const char* description, double Config::*member)
+{
+  return { { name, "double", description },
+           [name, member](Config& c, const std::string& v) { c.*member = parseDouble(name, v); },
+           [member](const Config& c) { return formatDouble(c.*member); } };
+}
+
+template <>
+KeyAccess makeKey<bool>(const char* name, const char* description, bool Config::*member)
+{
+  return { { name, "bool", description },
+           [name, member](Config& c, const std::string& v) { c.*member = parseBool(name, v); },
+           [member](const Config& c) { return std::string(c.*member ? "true" : "false"); } };
+}
+
+template <>
+KeyAccess makeKey<std::string>(const char* name, const char* description, std::string Config::*member)
+{
+  return { { name, "string", description },
+           [member](Config& c, const std::string& v) { c.*member = trim(v); },
+           [member](const Config& c) { return c.*member; } };
+}
+
+const std::vector<KeyAccess>& table()
+{
+  static const std::vector<KeyAccess> keys = {
+    makeKey("camera_type", "mono | stereo | panoramic", &Config::camera_type),
+    makeKey("description_type", "global (one descriptor per image) | grid (grid_x x grid_y cells)",
+            &Config::description_type),
+    makeKey("patch_size", "side of the square patch every cell is downsampled to (pixels)", &Config::patch_size),
+    makeKey("grid_x", "cells across, description_type grid", &Config::grid_x),
+    makeKey("grid_y", "cells down, description_type grid", &Config::grid_y),
+    makeKey("panoramas", "vertical sub-panoramas per panorama, camera_type panoramic", &Config::panoramas),
+    makeKey("illumination_invariance", "apply paper Eq. 6 before description (colour input)",
+            &Config::illumination_invariance),
+    makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha),
+    makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor),
+    makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length),
+    makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = off", &Config::threshold),
+    makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
+            &Config::exclusion_window),
+    makeKey("top_k", "candidates reported per frame", &Config::top_k),
+    makeKey("min_uniqueness", "accept only when 1 - best / second best >= this (0 = off)", &Config::min_uniqueness),
+    makeKey("uniqueness_window", "frames around the best match skipped when finding the second best (frames)",
+            &Config::uniqueness_window),
+    makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional),
+    makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history),
+    makeKey("stereo_num_disparities", "SGBM disparity range at 640 px width (pixels)",
+            &Config::stereo_num_disparities),
+    makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size),
+    makeKey("color_map", "distance matrix colour map 0..11 (AUTUMN BONE JET WINTER RAINBOW OCEAN SUMMER SPRING "
+                         "COOL HSV PINK HOT)",
+            &Config::color_map),
+  };
+  return keys;
+}
+
+const KeyAccess& find(const std::string& key)
+{
+  for (const auto& k : table())
+    if (k.key.name == key)
+      return k;
+  std::string known;
+  for (const auto& k : table())
+    known += (known.empty() ? "" : ", ") + k.key.name;
+  throw Error("unknown configuration key '" + key + "'; known keys: " + known);
+}
+
+std::string oneOf(const std::vector<std::string>& values)
+{
+  std::string s;
+  for (const auto& v : values)
+    s += (s.empty() ? "" : " | ") + v;
+  return s;
+}
+
+}  // namespace
+
+const std::vector<Config::Key>& Config::keys()
+{
+  static const std::vector<Key> keys = [] {
+    std::vector<Key> out;
+    for (const auto& k : table())
+      out.push_back(k.key);
+    return out;
+  }();
+  return keys;
+}
+
+const std::vector<std::string>& Config::descriptorKeys()
+{
+  static const std::vector<std::string> keys = { "camera_type", "description_type",      "patch_size",
+                                                 "grid_x",      "grid_y",                "panoramas",
+                                                 "descriptor",  "illumination_invariance", "alpha",
+                                                 "stereo_num_disparities", "stereo_block_size" };
+  return keys;
+}
+
+void Config::set(const std::string& key, const std::string& value)
+{
+  find(key).set(*this, value);
+}
+
+std::string Config::get(const std::string& key) const
+{
+  return find(key).get(*this);
+}
+
+bool Config::isBinaryDescriptor() const
+{
+  return !(descriptor == "SIFT" || descriptor == "SURF" || descriptor == "HOG");
+}
+
+std::vector<std::string> Config::validate() const
+{
+  std::vector<std::string> errors;
+  auto bad = [&errors](const std::string& key, const std::string& value, const std::string& expected) {
+    errors.push_back(key + ": value '" + value + "' is not allowed; expected " + expected);
+  };
+  auto inRange = [&](const char* key, int value, int low, int high) {
+    if (value < low || value > high)
+      bad(key, std::to_string(value), "an integer in [" + std::to_string(low) + ", " + std::to_string(high) + "]");
+  };
+
+  const std::vector<std::string> cameras = { "mono", "stereo", "panoramic" };
+  if (std::find(cameras.begin(), cameras.end(), camera_type) == cameras.end())
+    bad("camera_type", camera_type, oneOf(cameras));
+  if (description_type != "global" && description_type != "grid")
+    bad("description_type", description_type, "global | grid");
+  inRange("patch_size", patch_size, 8, 1024);
+  inRange("grid_x", grid_x, 1, 64);
+  inRange("grid_y", grid_y, 1, 64);
+  if (description_type == "global" && (grid_x != 1 || grid_y != 1))
+    bad("grid_x/grid_y", std::to_string(grid_x) + "x" + std::to_string(grid_y),
+        "1x1 with description_type global (set description_type: grid to use a grid)");
+  inRange("panoramas", panoramas, 1, 64);
+  if (!std::isfinite(alpha) || alpha < 0.0 || alpha > 1.0)
+    bad("alpha", formatDouble(alpha), "a number in [0, 1]");
+  const auto& names = descriptorNames();
+  if (std::find(names.begin(), names.end(), descriptor) == names.end())
+    bad("descriptor", descriptor, oneOf(names));
+  else if (descriptor == "D-LDB" && camera_type != "stereo")
+    bad("descriptor", descriptor, "a mono descriptor (D-LDB needs camera_type stereo)");
+  inRange("sequence_length", sequence_length, 1, 10000);
+  if (!std::isfinite(threshold) || !(threshold == -1.0 || (threshold >= 0.0 && threshold <= 1.0)))
+    bad("threshold", formatDouble(threshold), "-1 (off) or a number in [0, 1]");
+  inRange("exclusion_window", exclusion_window, 0, 100000000);
+  inRange("top_k", top_k, 1, 1000);
+  if (!std::isfinite(min_uniqueness) || min_uniqueness < 0.0 || min_uniqueness > 1.0)
+    bad("min_uniqueness", formatDouble(min_uniqueness), "a number in [0, 1]");
+  inRange("uniqueness_window", uniqueness_window, 0, 100000);
+  inRange("max_history", max_history, 0, 100000000);
+  if (max_history > 0 && max_history <= 2 * (sequence_length + exclusion_window))
+    bad("max_history", std::to_string(max_history),
+        "0 (unbounded) or more than 2 * (sequence_length + exclusion_window) = " +
+            std::to_string(2 * (sequence_length + exclusion_window)));
+  inRange("stereo_num_disparities", stereo_num_disparities, 16, 1024);
+  if (stereo_block_size < 1 || stereo_block_size > 31 || stereo_block_size % 2 == 0)
+    bad("stereo_block_size", std::to_string(stereo_block_size), "an odd integer in [1, 31]");
+  inRange("color_map", color_map, 0, 11);
+  return errors;
+}
+
+void Config::validateOrThrow() const
+{
+  const auto errors = validate();
+  if (errors.empty())
+    return;
+  std::string message = "invalid configuration: ";
+  for (size_t i = 0; i < errors.size(); ++i)
+    message += (i ? "; " : "") + errors[i];
+  throw Error(message);
+}
+
+Config Config::fromYamlString(const std::string& yaml)
+{
+  YAML::Node root;
+  try
+  {
+    root = YAML::Load(yaml);
+  }
+  catch (const YAML::Exception& e)
+  {
+    throw Error(std::string("configuration is not valid YAML: ") + e.what());
+  }
+  Config config;
+  if (root.IsNull())
+    return config;
+  if (!root.IsMap())
+    throw Error("configuration must be a YAML mapping of key: value");
+  for (const auto& entry : root)
+  {
+    const std::string key = entry.first.as<std::string>();
+    if (!entry.second.IsScalar())
+      throw Error(key + ": expected a single value, not a list or mapping");
+    config.set(key, entry.second.as<std::string>());
+  }
+  return config;
+}
+
+Config Config::fromYamlFile(const std::string& path)
+{
+  std::ifstream in(path);
+  if (!in)
+    throw Error("cannot read configuration file '" + path + "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  try
+  {
+    return fromYamlString(text.str());
+  }
+  catch (const Error& e)
+  {
+    throw Error(path + ": " + e.what());
+  }
+}
+
+std::string Config::toYaml() const
+{
+  std::string out;
+  for (const auto& k : table())
+  {
+    std::string value = k.get(*this);
+    if (k.key.type == "string")
+      value = "\"" + value + "\"";
+    out += k.key.name + ": " + value + "\n";
+  }
+  return out;
+}
+
+double alphaFromWavelengths(double lambda_red, double lambda_green, double lambda_blue)
+{
+  if (!(lambda_red > 0 && lambda_green > 0 && lambda_blue > 0) || lambda_red == lambda_blue)
+    throw Error("alphaFromWavelengths: peak wavelengths must be positive and red != blue (nm)");
+  // Paper Eq. 7.
+  return (lambda_blue / lambda_green - lambda_blue / lambda_red) / (1.0 - lambda_blue / lambda_red);
+}
+
+}  // namespace openable

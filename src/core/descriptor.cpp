@@ -1,0 +1,63 @@
+#include "openable/descriptor.h"
+
+#include <algorithm>
+
+#include "openable/error.h"
+#include "openable/ldb.h"
+
+// @DESCRIPTOR_INCLUDES@ (other extractors' headers)
+
+namespace openable
+{
+void DescriptorExtractor::describeBinary(const Patch&, uint64_t*) const
+{
+  throw Error(name() + " is a vector descriptor; it has no binary form");
+}
+
+void DescriptorExtractor::describeFloat(const Patch&, float*) const
+{
+  throw Error(name() + " is a binary descriptor; it has no float form");
+}
+
+const std::vector<std::string>& descriptorNames()
+{
+  static const std::vector<std::string> names = { "LDB", "D-LDB", "BRIEF", "BRISK", "ORB",
+                                                  "FREAK", "SIFT",  "SURF",  "HOG" };
+  return names;
+}
+
+namespace
+{
+std::unique_ptr<DescriptorExtractor> createByName(const Config& config)
+{
+  const std::string& name = config.descriptor;
+  if (name == "LDB")
+    return std::make_unique<LdbExtractor>();
+  // @DESCRIPTOR_FACTORY@ (other extractors: `if (name == "X") return std::make_unique<XExtractor>(...);`)
+  (void)config;
+  return nullptr;
+}
+}  // namespace
+
+std::unique_ptr<DescriptorExtractor> createDescriptorExtractor(const Config& config)
+{
+  const auto& names = descriptorNames();
+  if (std::find(names.begin(), names.end(), config.descriptor) == names.end())
+  {
+    std::string valid;
+    for (const auto& n : names)
+      valid += (valid.empty() ? "" : ", ") + n;
+    throw Error("unknown descriptor '" + config.descriptor + "'; valid descriptors: " + valid);
+  }
+  if (config.descriptor == "D-LDB" && config.camera_type != "stereo")
+    throw Error("descriptor D-LDB describes disparity and needs camera_type stereo (got " + config.camera_type + ")");
+  auto extractor = createByName(config);
+  if (!extractor)
+    throw Error("descriptor '" + config.descriptor + "' is not available in this build");
+  if (config.patch_size < extractor->minPatchSize())
+    throw Error("patch_size " + std::to_string(config.patch_size) + " is too small for " + extractor->name() +
+                "; expected at least " + std::to_string(extractor->minPatchSize()));
+  return extractor;
+}
+
+}  // namespace openable

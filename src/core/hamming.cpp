@@ -1,0 +1,250 @@
+#include "openable/hamming.h"
+
+#include <cmath>
+
+#include <immintrin.h>
+
+#include "openable/error.h"
+
+// Each kernel is compiled for its own instruction set with GCC's target attribute, so the package builds
+// for any x86-64 (no -march=native) and picks the fastest kernel the running CPU supports.
+
+namespace openable
+{
+namespace
+{
+// ---------------------------------------------------------------------------------------------- portable
+inline uint32_t popcountPortable(uint64_t x)
+{
+  // SWAR bit count: pairs, nibbles, bytes, then one multiply sums the bytes.
+  x = x - ((x >> 1) & 0x5555555555555555ULL);
+  x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0FULL;
+  return static_cast<uint32_t>((x * 0x0101010101010101ULL) >> 56);
+}
+
+uint32_t pairPortable(const uint64_t* a, const uint64_t* b, size_t words)
+{
+  uint32_t sum = 0;
+  for (size_t i = 0; i < words; ++i)
+    sum += popcountPortable(a[i] ^ b[i]);
+  return sum;
+}
+
+void rowPortable(const uint64_t* q, const uint64_t* rows, size_t stride, size_t words, size_t count, uint32_t* out)
+{
+  for (size_t i = 0; i < count; ++i)
+    out[i] = pairPortable(q, rows + i * stride, words);
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+#define OPENABLE_X86 1
+// ---------------------------------------------------------------------------------------------- popcnt
+__attribute__((target("popcnt"))) inline uint32_t pairPopcntInline(const uint64_t* a, const uint64_t* b,
+                                                                    size_t words)
+{
+  uint64_t sum = 0;
+  for (size_t i = 0; i < words; ++i)
+    sum += static_cast<uint64_t>(_mm_popcnt_u64(a[i] ^ b[i]));
+  return static_cast<uint32_t>(sum);
+}
+
+__attribute__((target("popcnt"))) uint32_t pairPopcnt(const uint64_t* a, const uint64_t* b, size_t words)
+{
+  return pairPopcntInline(a, b, words);
+}
+
+__attribute__((target("popcnt"))) void rowPopcnt(const uint64_t* q, const uint64_t* rows, size_t stride, size_t words,
+                                                 size_t count, uint32_t* out)
+{
+  for (size_t i = 0; i < count; ++i)
+    out[i] = pairPopcntInline(q, rows + i * stride, words);
+}
+
+// ---------------------------------------------------------------------------------------------- AVX2
+// Bit count of every byte by two 4-bit table lookups (vpshufb), summed per 64-bit lane with vpsadbw.
+__attribute__((target("avx2,popcnt"))) inline uint32_t pairAvx2Inline(const uint64_t* a, const uint64_t* b,
+                                                                       size_t words)
+{
+  const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2, 1, 2, 2, 3, 1, 2,
+                                         2, 3, 2, 3, 3, 4);
+  const __m256i low_mask = _mm256_set1_epi8(0x0f);
+  __m256i total = _mm256_setzero_si256();
+  size_t i = 0;
+  for (; i + 4 <= words; i += 4)
+  {
+    const __m256i x = _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + i)),
+                                       _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + i)));
+    const __m256i lo = _mm256_shuffle_epi8(table, _mm256_and_si256(x, low_mask));
+    const __m256i hi = _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(x, 4), low_mask));
+    total = _mm256_add_epi64(total, _mm256_sad_epu8(_mm256_add_epi8(lo, hi), _mm256_setzero_si256()));
+  }
+  uint64_t sum = static_cast<uint64_t>(_mm256_extract_epi64(total, 0)) + _mm256_extract_epi64(total, 1) +
+                 _mm256_extract_epi64(total, 2) + _mm256_extract_epi64(total, 3);
+  for (; i < words; ++i)
+    sum += static_cast<uint64_t>(_mm_popcnt_u64(a[i] ^ b[i]));
+  return static_cast<uint32_t>(sum);
+}
+
+__attribute__((target("avx2,popcnt"))) uint32_t pairAvx2(const uint64_t* a, const uint64_t* b, size_t words)
+{
+  return pairAvx2Inline(a, b, words);
+}
+
+__attribute__((target("avx2,popcnt"))) void rowAvx2(const uint64_t* q, const uint64_t* rows, size_t stride,
+                                                    size_t words, size_t count, uint32_t* out)
+{
+  for (size_t i = 0; i < count; ++i)
+    out[i] = pairAvx2Inline(q, rows + i * stride, words);
+}
+
+// ---------------------------------------------------------------------------------------------- AVX-512
+// GCC 12's own avx512fintrin.h trips -Wuninitialized inside its reduction helpers (a known false positive).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+__attribute__((target("avx512f,avx512vpopcntdq"))) inline uint32_t pairAvx512Inline(const uint64_t* a,
+                                                                                     const uint64_t* b, size_t words)
+{
+  __m512i total = _mm512_setzero_si512();
+  size_t i = 0;
+  for (; i + 8 <= words; i += 8)
+    total = _mm512_add_epi64(total, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(a + i),
+                                                                          _mm512_loadu_si512(b + i))));
+  if (i < words)
+  {
+    // Masked loads read only the remaining words (and never past the end of the descriptor).
+    const __mmask8 mask = static_cast<__mmask8>((1u << (words - i)) - 1u);
+    const __m512i x = _mm512_xor_si512(_mm512_maskz_loadu_epi64(mask, a + i), _mm512_maskz_loadu_epi64(mask, b + i));
+    total = _mm512_add_epi64(total, _mm512_popcnt_epi64(x));
+  }
+  return static_cast<uint32_t>(_mm512_reduce_add_epi64(total));
+}
+
+__attribute__((target("avx512f,avx512vpopcntdq"))) uint32_t pairAvx512(const uint64_t* a, const uint64_t* b,
+                                                                        size_t words)
+{
+  return pairAvx512Inline(a, b, words);
+}
+
+__attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t* q, const uint64_t* rows,
+                                                                   size_t stride, size_t words, size_t count,
+                                                                   uint32_t* out)
+{
+  for (size_t i = 0; i < count; ++i)
+    out[i] = pairAvx512Inline(q, rows + i * stride, words);
+}
+#pragma GCC diagnostic pop
+#endif
+
+using PairFn = uint32_t (*)(const uint64_t*, const uint64_t*, size_t);
+using RowFn = void (*)(const uint64_t*, const uint64_t*, size_t, size_t, size_t, uint32_t*);
+
+struct Kernel
+{
+  PairFn pair;
+  RowFn row;
+};
+
+Kernel kernelFor(HammingKernel kernel)
+{
+  switch (kernel)
+  {
+#ifdef OPENABLE_X86
+    case HammingKernel::kPopcnt:
+      return { pairPopcnt, rowPopcnt };
+    case HammingKernel::kAvx2:
+      return { pairAvx2, rowAvx2 };
+    case HammingKernel::kAvx512Vpopcntdq:
+      return { pairAvx512, rowAvx512 };
+#endif
+    default:
+      return { pairPortable, rowPortable };
+  }
+}
+
+Kernel checkedKernel(HammingKernel kernel)
+{
+  for (HammingKernel k : supportedKernels())
+    if (k == kernel)
+      return kernelFor(kernel);
+  throw Error("Hamming kernel " + kernelName(kernel) + " is not supported by this CPU");
+}
+
+const Kernel& best()
+{
+  static const Kernel kernel = kernelFor(bestKernel());
+  return kernel;
+}
+}  // namespace
+
+std::string kernelName(HammingKernel kernel)
+{
+  switch (kernel)
+  {
+    case HammingKernel::kPortable:
+      return "portable";
+    case HammingKernel::kPopcnt:
+      return "popcnt";
+    case HammingKernel::kAvx2:
+      return "avx2";
+    case HammingKernel::kAvx512Vpopcntdq:
+      return "avx512vpopcntdq";
+  }
+  return "unknown";
+}
+
+std::vector<HammingKernel> supportedKernels()
+{
+  std::vector<HammingKernel> kernels = { HammingKernel::kPortable };
+#ifdef OPENABLE_X86
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("popcnt"))
+    kernels.push_back(HammingKernel::kPopcnt);
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt"))
+    kernels.push_back(HammingKernel::kAvx2);
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vpopcntdq"))
+    kernels.push_back(HammingKernel::kAvx512Vpopcntdq);
+#endif
+  return kernels;
+}
+
+HammingKernel bestKernel()
+{
+  return supportedKernels().back();
+}
+
+uint32_t hamming(const uint64_t* a, const uint64_t* b, size_t words)
+{
+  return best().pair(a, b, words);
+}
+
+uint32_t hamming(HammingKernel kernel, const uint64_t* a, const uint64_t* b, size_t words)
+{
+  return checkedKernel(kernel).pair(a, b, words);
+}
+
+void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size_t words, size_t count,
+                uint32_t* out)
+{
+  best().row(query, rows, stride, words, count, out);
+}
+
+void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* rows, size_t stride, size_t words,
+                size_t count, uint32_t* out)
+{
+  checkedKernel(kernel).row(query, rows, stride, words, count, out);
+}
+
+float l2Distance(const float* a, const float* b, size_t length)
+{
+  double sum = 0.0;
+  for (size_t i = 0; i < length; ++i)
+  {
+    const double d = double(a[i]) - double(b[i]);
+    sum += d * d;
+  }
+  return static_cast<float>(std::sqrt(sum));
+}
+
+}  // namespace openable

@@ -1,0 +1,111 @@
+#include "openable/image_source.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "openable/error.h"
+
+namespace fs = std::filesystem;
+
+namespace openable
+{
+struct ImageSource::Video
+{
+  cv::VideoCapture capture;
+  size_t frames = 0;
+  size_t read = 0;
+};
+
+namespace
+{
+bool isImageFile(const fs::path& p)
+{
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".ppm" || ext == ".pgm";
+}
+}  // namespace
+
+ImageSource::ImageSource(const std::string& path) : path_(path)
+{
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    throw Error("input '" + path + "' does not exist; expected a folder of images or a video file");
+  if (fs::is_directory(path, ec))
+  {
+    for (const auto& entry : fs::directory_iterator(path, ec))
+      if (entry.is_regular_file() && isImageFile(entry.path()))
+        files_.push_back(entry.path().filename().string());
+    std::sort(files_.begin(), files_.end());
+    if (files_.empty())
+      throw Error("folder '" + path + "' holds no images (.png .jpg .jpeg .bmp .ppm .pgm)");
+    return;
+  }
+  video_ = std::make_unique<Video>();
+  if (!video_->capture.open(path) || !video_->capture.isOpened())
+    throw Error("cannot open '" + path + "' as a video; expected a folder of images or a video file");
+  video_->frames = static_cast<size_t>(std::max(0.0, video_->capture.get(cv::CAP_PROP_FRAME_COUNT)));
+}
+
+ImageSource::~ImageSource() = default;
+
+size_t ImageSource::size() const
+{
+  return video_ ? video_->frames : files_.size();
+}
+
+bool ImageSource::isVideo() const
+{
+  return video_ != nullptr;
+}
+
+bool ImageSource::next(cv::Mat& image, std::string& name)
+{
+  if (video_)
+  {
+    if (!video_->capture.read(image) || image.empty())
+      return false;
+    name = "frame_" + std::to_string(video_->read++);
+    return true;
+  }
+  if (next_index_ >= files_.size())
+    return false;
+  name = files_[next_index_++];
+  image = cv::imread((fs::path(path_) / name).string(), cv::IMREAD_COLOR);
+  return true;
+}
+
+void writeFileAtomically(const std::string& path, const std::string& bytes)
+{
+  const std::string temp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out)
+      throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.flush();
+    if (!out)
+    {
+      out.close();
+      std::remove(temp.c_str());
+      throw Error("cannot write '" + path + "' (disk full?)");
+    }
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0)
+  {
+    const std::string reason = std::strerror(errno);
+    std::remove(temp.c_str());
+    throw Error("cannot move the new file into place at '" + path + "': " + reason);
+  }
+}
+
+}  // namespace openable

@@ -1,0 +1,304 @@
+#include "openable/place_database.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "openable/error.h"
+#include "openable/image_source.h"
+
+namespace openable
+{
+namespace
+{
+constexpr char kMagic[8] = { 'O', 'P', 'N', 'A', 'B', 'L', 'E', 'M' };
+constexpr uint32_t kVersion = 1;
+constexpr size_t kAlignment = 64;
+
+uint64_t fnv1a(const char* data, size_t size)
+{
+  uint64_t hash = 0xcbf29ce484222325ULL;
+  for (size_t i = 0; i < size; ++i)
+  {
+    hash ^= static_cast<uint8_t>(data[i]);
+    hash *= 0x100000001b3ULL;
+  }
+  return hash;
+}
+
+/// Appends plain values (the file format is little-endian, as every platform this runs on).
+class Writer
+{
+public:
+  template <typename T>
+  void put(const T& value)
+  {
+    bytes_.append(reinterpret_cast<const char*>(&value), sizeof(T));
+  }
+  void putBytes(const void* data, size_t size)
+  {
+    bytes_.append(static_cast<const char*>(data), size);
+  }
+  void putString(const std::string& s)
+  {
+    put<uint64_t>(s.size());
+    bytes_ += s;
+  }
+  std::string& bytes()
+  {
+    return bytes_;
+  }
+
+private:
+  std::string bytes_;
+};
+
+/// Reads plain values with bounds checks: a truncated file is an error, never a read past the end.
+class Reader
+{
+public:
+  Reader(const std::string& bytes, size_t end, const std::string& path) : bytes_(bytes), end_(end), path_(path)
+  {
+  }
+  template <typename T>
+  T get(const char* what)
+  {
+    T value;
+    getBytes(&value, sizeof(T), what);
+    return value;
+  }
+  void getBytes(void* out, size_t size, const char* what)
+  {
+    if (size > end_ - pos_)
+      throw Error("map file '" + path_ + "' is truncated (while reading " + what + ")");
+    std::memcpy(out, bytes_.data() + pos_, size);
+    pos_ += size;
+  }
+  std::string getString(const char* what, size_t max_size)
+  {
+    const auto size = get<uint64_t>(what);
+    if (size > max_size || size > end_ - pos_)
+      throw Error("map file '" + path_ + "' is corrupt (" + what + " of " + std::to_string(size) + " bytes)");
+    std::string s(bytes_.data() + pos_, size);
+    pos_ += size;
+    return s;
+  }
+  size_t remaining() const
+  {
+    return end_ - pos_;
+  }
+
+private:
+  const std::string& bytes_;
+  size_t end_;
+  size_t pos_ = 0;
+  const std::string& path_;
+};
+}  // namespace
+
+PlaceDatabase::PlaceDatabase(const DescriptorLayout& layout, size_t capacity, std::string config_yaml)
+  : layout_(layout), stride_(layout.frameWords()), capacity_(capacity), config_yaml_(std::move(config_yaml))
+{
+  if (stride_ == 0)
+    throw Error("PlaceDatabase: descriptor layout has no words");
+}
+
+PlaceDatabase::PlaceDatabase(const PlaceDatabase& other)
+  : layout_(other.layout_)
+  , stride_(other.stride_)
+  , capacity_(other.capacity_)
+  , config_yaml_(other.config_yaml_)
+  , first_id_(other.first_id_)
+  , infos_(other.infos_)
+{
+  reserve(other.size());
+  if (other.size())
+    std::memcpy(data_, other.data_, sizeof(uint64_t) * stride_ * other.size());
+}
+
+PlaceDatabase::PlaceDatabase(PlaceDatabase&& other) noexcept
+  : layout_(other.layout_), stride_(other.stride_), capacity_(other.capacity_)
+{
+  swap(*this, other);
+}
+
+PlaceDatabase& PlaceDatabase::operator=(PlaceDatabase other)
+{
+  swap(*this, other);
+  return *this;
+}
+
+PlaceDatabase::~PlaceDatabase()
+{
+  std::free(data_);
+}
+
+void swap(PlaceDatabase& a, PlaceDatabase& b) noexcept
+{
+  using std::swap;
+  swap(a.layout_, b.layout_);
+  swap(a.stride_, b.stride_);
+  swap(a.capacity_, b.capacity_);
+  swap(a.config_yaml_, b.config_yaml_);
+  swap(a.first_id_, b.first_id_);
+  swap(a.infos_, b.infos_);
+  swap(a.data_, b.data_);
+  swap(a.allocated_, b.allocated_);
+}
+
+void PlaceDatabase::reserve(size_t frames)
+{
+  if (frames <= allocated_)
+    return;
+  const size_t bytes = (sizeof(uint64_t) * stride_ * frames + kAlignment - 1) / kAlignment * kAlignment;
+  auto* data = static_cast<uint64_t*>(std::aligned_alloc(kAlignment, bytes));
+  if (!data)
+    throw Error("PlaceDatabase: out of memory for " + std::to_string(frames) + " frames");
+  if (data_)
+    std::memcpy(data, data_, sizeof(uint64_t) * stride_ * size());
+  std::free(data_);
+  data_ = data;
+  allocated_ = frames;
+}
+
+size_t PlaceDatabase::pendingEviction() const
+{
+  if (capacity_ == 0 || size() < capacity_)
+    return 0;
+  return std::max<size_t>(1, capacity_ / 16);
+}
+
+uint64_t PlaceDatabase::add(const uint64_t* descriptor, size_t words, FrameInfo info)
+{
+  if (words != stride_)
+    throw Error("descriptor of " + std::to_string(words) + " words does not fit the database layout of " +
+                std::to_string(stride_) + " words");
+  evictOldest(pendingEviction());
+  if (size() == allocated_)
+  {
+    size_t grown = std::max<size_t>(64, allocated_ * 2);
+    if (capacity_)
+      grown = std::min(grown, capacity_);
+    reserve(grown);
+  }
+  std::memcpy(data_ + size() * stride_, descriptor, sizeof(uint64_t) * stride_);
+  info.id = first_id_ + size();
+  infos_.push_back(std::move(info));
+  return infos_.back().id;
+}
+
+void PlaceDatabase::evictOldest(size_t count)
+{
+  count = std::min(count, size());
+  if (count == 0)
+    return;
+  std::memmove(data_, data_ + count * stride_, sizeof(uint64_t) * stride_ * (size() - count));
+  infos_.erase(infos_.begin(), infos_.begin() + static_cast<long>(count));
+  first_id_ += count;
+}
+
+size_t PlaceDatabase::bytes() const
+{
+  size_t total = sizeof(uint64_t) * stride_ * allocated_ + sizeof(FrameInfo) * infos_.capacity();
+  for (const auto& info : infos_)
+    total += info.source.capacity() > 15 ? info.source.capacity() : 0;  // beyond the small-string buffer
+  return total;
+}
+
+void PlaceDatabase::clear()
+{
+  first_id_ += size();
+  infos_.clear();
+}
+
+void PlaceDatabase::save(const std::string& path) const
+{
+  Writer w;
+  w.putBytes(kMagic, sizeof(kMagic));
+  w.put<uint32_t>(kVersion);
+  w.put<uint32_t>(layout_.binary ? 1 : 0);
+  w.put<int32_t>(layout_.cell_length);
+  w.put<int32_t>(layout_.cell_words);
+  w.put<int32_t>(layout_.cells);
+  w.put<int32_t>(layout_.blocks);
+  w.put<uint64_t>(capacity_);
+  w.put<uint64_t>(first_id_);
+  w.put<uint64_t>(size());
+  w.putString(config_yaml_);
+  for (const auto& info : infos_)
+  {
+    w.put<uint64_t>(info.id);
+    w.put<double>(info.stamp);
+    w.put<uint32_t>(info.session);
+    w.put<uint8_t>(info.has_pose ? 1 : 0);
+    for (double v : info.pose)
+      w.put<double>(v);
+    w.putString(info.source);
+  }
+  if (size())
+    w.putBytes(data_, sizeof(uint64_t) * stride_ * size());
+  w.put<uint64_t>(fnv1a(w.bytes().data(), w.bytes().size()));
+  writeFileAtomically(path, w.bytes());
+}
+
+PlaceDatabase PlaceDatabase::load(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw Error("cannot open map file '" + path + "'");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string bytes = buffer.str();
+  if (bytes.size() < sizeof(kMagic) + sizeof(uint64_t) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
+    throw Error("'" + path + "' is not an openable_ros map file (wrong magic bytes)");
+  const size_t body = bytes.size() - sizeof(uint64_t);
+  uint64_t stored_checksum;
+  std::memcpy(&stored_checksum, bytes.data() + body, sizeof(uint64_t));
+  Reader r(bytes, body, path);
+  char magic[sizeof(kMagic)];
+  r.getBytes(magic, sizeof(magic), "magic");
+  const auto version = r.get<uint32_t>("version");
+  if (version != kVersion)
+    throw Error("map file '" + path + "' has format version " + std::to_string(version) +
+                "; this build reads version " + std::to_string(kVersion));
+  if (fnv1a(bytes.data(), body) != stored_checksum)
+    throw Error("map file '" + path + "' is corrupt or truncated (checksum mismatch)");
+
+  DescriptorLayout layout;
+  layout.binary = r.get<uint32_t>("layout") != 0;
+  layout.cell_length = r.get<int32_t>("layout");
+  layout.cell_words = r.get<int32_t>("layout");
+  layout.cells = r.get<int32_t>("layout");
+  layout.blocks = r.get<int32_t>("layout");
+  if (layout.cell_length <= 0 || layout.cell_words <= 0 || layout.cells <= 0 || layout.blocks <= 0 ||
+      layout.cells % layout.blocks != 0 || layout.frameWords() > (1 << 24))
+    throw Error("map file '" + path + "' is corrupt (invalid descriptor layout)");
+  const auto capacity = r.get<uint64_t>("capacity");
+  const auto first_id = r.get<uint64_t>("first id");
+  const auto frames = r.get<uint64_t>("frame count");
+  PlaceDatabase db(layout, capacity, r.getString("configuration", 1 << 20));
+  db.first_id_ = first_id;
+  if (frames > r.remaining() / (sizeof(uint64_t) * layout.frameWords()))
+    throw Error("map file '" + path + "' is corrupt (frame count " + std::to_string(frames) + " too large)");
+  db.infos_.resize(frames);
+  for (auto& info : db.infos_)
+  {
+    info.id = r.get<uint64_t>("frame id");
+    info.stamp = r.get<double>("stamp");
+    info.session = r.get<uint32_t>("session");
+    info.has_pose = r.get<uint8_t>("pose flag") != 0;
+    for (double& v : info.pose)
+      v = r.get<double>("pose");
+    info.source = r.getString("source name", 1 << 16);
+  }
+  db.reserve(frames);
+  if (frames)
+    r.getBytes(db.data_, sizeof(uint64_t) * db.stride_ * frames, "descriptors");
+  if (r.remaining() != 0)
+    throw Error("map file '" + path + "' is corrupt (" + std::to_string(r.remaining()) + " unexpected bytes)");
+  return db;
+}
+
+}  // namespace openable

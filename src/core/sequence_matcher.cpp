@@ -1,0 +1,244 @@
+#include "openable/sequence_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "openable/error.h"
+
+namespace openable
+{
+namespace
+{
+/// Columns processed together: their descriptors (and those L frames earlier) stay in cache between the
+/// two distance computations of the recurrence.
+constexpr size_t kChunk = 256;
+}  // namespace
+
+SequenceMatcher::SequenceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional)
+  : metric_(layout), sequence_length_(1), bidirectional_(bidirectional)
+{
+  setSequenceLength(sequence_length);
+}
+
+void SequenceMatcher::setSequenceLength(int sequence_length)
+{
+  if (sequence_length < 1 || sequence_length > std::numeric_limits<uint16_t>::max())
+    throw Error("sequence_length " + std::to_string(sequence_length) + " is out of range; expected 1..65535");
+  // Sums are 32-bit: L full-distance frames must fit.
+  if (uint64_t(sequence_length) * metric_.layout().maxFrameDistance() > std::numeric_limits<uint32_t>::max())
+    throw Error("sequence_length " + std::to_string(sequence_length) +
+                " is too long for descriptors of this size (sequence sums would overflow)");
+  sequence_length_ = sequence_length;
+  // Keep the last L + 1 query descriptors: the recurrence needs the frame that leaves the sequence.
+  const size_t words = metric_.layout().frameWords();
+  std::vector<uint64_t> recent(words * (sequence_length_ + 1), 0);
+  recent_.swap(recent);
+  std::fill(forward_.sum.begin(), forward_.sum.end(), 0u);
+  std::fill(forward_.count.begin(), forward_.count.end(), uint16_t(0));
+  std::fill(reverse_.sum.begin(), reverse_.sum.end(), 0u);
+  std::fill(reverse_.count.begin(), reverse_.count.end(), uint16_t(0));
+  // Chains restart: the ring no longer holds the frames that would leave them. Count queries from here.
+  queries_ = 0;
+}
+
+void SequenceMatcher::setBidirectional(bool bidirectional)
+{
+  if (bidirectional && !bidirectional_)
+  {
+    reverse_.sum.assign(forward_.sum.size(), 0u);
+    reverse_.count.assign(forward_.count.size(), 0);
+  }
+  bidirectional_ = bidirectional;
+}
+
+void SequenceMatcher::reset()
+{
+  queries_ = 0;
+  first_id_ = 0;
+  forward_ = Chains();
+  reverse_ = Chains();
+}
+
+const uint64_t* SequenceMatcher::recentQuery(size_t age) const
+{
+  const size_t slots = sequence_length_ + 1;
+  const uint64_t index = queries_ - 1 - age;  // queries_ - 1 is the current query
+  return recent_.data() + (index % slots) * metric_.layout().frameWords();
+}
+
+void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates)
+{
+  if (reference.layout() != metric_.layout())
+    throw Error("SequenceMatcher: reference database descriptors do not match the query descriptors");
+  candidates = std::min(candidates, reference.size());
+  const size_t words = metric_.layout().frameWords();
+  std::memcpy(recent_.data() + (queries_ % (sequence_length_ + 1)) * words, query, sizeof(uint64_t) * words);
+  ++queries_;
+
+  // Frames evicted from the front of the reference take their columns with them.
+  const uint64_t new_first = reference.firstId();
+  if (new_first != first_id_)
+  {
+    const size_t gone = static_cast<size_t>(std::min<uint64_t>(new_first - first_id_, forward_.sum.size()));
+    for (Chains* chains : { &forward_, &reverse_ })
+    {
+      const size_t n = std::min(gone, chains->sum.size());
+      chains->sum.erase(chains->sum.begin(), chains->sum.begin() + static_cast<long>(n));
+      chains->count.erase(chains->count.begin(), chains->count.begin() + static_cast<long>(n));
+    }
+    first_id_ = new_first;
+  }
+  current_distances_.resize(candidates);
+  advanceForward(reference, new_first, candidates);
+  if (bidirectional_)
+    advanceReverse(reference, new_first, candidates);
+}
+
+void SequenceMatcher::advanceForward(const PlaceDatabase& reference, uint64_t, size_t columns)
+{
+  const size_t L = sequence_length_;
+  // Columns that did not exist at the previous frame start with count 0 (no chain).
+  const size_t old_columns = forward_.sum.size();
+  forward_.sum.resize(std::max(old_columns, columns), 0u);
+  forward_.count.resize(std::max(old_columns, columns), 0);
+  uint32_t* sum = forward_.sum.data();
+  uint16_t* count = forward_.count.data();
+  const bool can_drop = queries_ > L;  // the query L frames ago exists
+  const uint64_t* query = recentQuery(0);
+  const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
+  dropped_distances_.resize(kChunk);
+
+  // Descending, so that column c - 1 still holds the previous frame's value when column c reads it.
+  for (size_t end = columns; end > 0;)
+  {
+    const size_t begin = end > kChunk ? end - kChunk : 0;
+    uint32_t* current = current_distances_.data();
+    metric_.row(query, reference.descriptor(begin), end - begin, current + begin);
+    // d(t - L, j - L) for the columns of this chunk whose j - L is stored.
+    const size_t drop_begin = std::max(begin, L);
+    if (can_drop && drop_begin < end)
+      metric_.row(leaving_query, reference.descriptor(drop_begin - L), end - drop_begin,
+                  dropped_distances_.data() + (drop_begin - begin));
+    for (size_t c = end; c-- > begin;)
+    {
+      const uint16_t previous_count = c > 0 ? count[c - 1] : 0;
+      if (previous_count == 0)
+      {
+        sum[c] = current[c];
+        count[c] = 1;
+      }
+      else if (previous_count < L)
+      {
+        sum[c] = sum[c - 1] + current[c];
+        count[c] = previous_count + 1;
+      }
+      else if (c >= L && can_drop)
+      {
+        sum[c] = sum[c - 1] + current[c] - dropped_distances_[c - begin];
+        count[c] = static_cast<uint16_t>(L);
+      }
+      else
+      {
+        // The frame leaving the sequence was evicted from a bounded history: the chain starts again.
+        sum[c] = current[c];
+        count[c] = 1;
+      }
+    }
+    end = begin;
+  }
+  forward_.sum.resize(columns);
+  forward_.count.resize(columns);
+}
+
+void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, uint64_t, size_t columns)
+{
+  const size_t L = sequence_length_;
+  const size_t old_columns = reverse_.sum.size();
+  reverse_.sum.resize(std::max(old_columns, columns), 0u);
+  reverse_.count.resize(std::max(old_columns, columns), 0);
+  uint32_t* sum = reverse_.sum.data();
+  uint16_t* count = reverse_.count.data();
+  const size_t stored = reference.size();
+  const bool can_drop = queries_ > L;
+  const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
+  const uint32_t* current = current_distances_.data();
+  dropped_distances_.resize(kChunk);
+
+  // Ascending, so that column c + 1 still holds the previous frame's value when column c reads it:
+  // R_t[j] = R_{t-1}[j + 1] + d(t, j) - d(t - L, j + L).
+  for (size_t begin = 0; begin < columns; begin += kChunk)
+  {
+    const size_t end = std::min(columns, begin + kChunk);
+    const size_t drop_end = std::min(end, stored > L ? stored - L : 0);
+    if (can_drop && begin < drop_end)
+      metric_.row(leaving_query, reference.descriptor(begin + L), drop_end - begin, dropped_distances_.data());
+    for (size_t c = begin; c < end; ++c)
+    {
+      const uint16_t previous_count = c + 1 < old_columns ? count[c + 1] : 0;
+      if (previous_count == 0)
+      {
+        sum[c] = current[c];
+        count[c] = 1;
+      }
+      else if (previous_count < L)
+      {
+        sum[c] = sum[c + 1] + current[c];
+        count[c] = previous_count + 1;
+      }
+      else if (c < drop_end && can_drop)
+      {
+        sum[c] = sum[c + 1] + current[c] - dropped_distances_[c - begin];
+        count[c] = static_cast<uint16_t>(L);
+      }
+      else
+      {
+        sum[c] = current[c];
+        count[c] = 1;
+      }
+    }
+  }
+  reverse_.sum.resize(columns);
+  reverse_.count.resize(columns);
+}
+
+float SequenceMatcher::normalized(size_t column, int* direction) const
+{
+  const double max_distance = double(metric_.layout().maxFrameDistance());
+  const uint16_t n = forward_.count[column];
+  float best = n ? static_cast<float>(forward_.sum[column] / (n * max_distance)) : std::nanf("");
+  int dir = 1;
+  if (bidirectional_)
+  {
+    const uint16_t r = reverse_.count[column];
+    if (r)
+    {
+      const float reverse = static_cast<float>(reverse_.sum[column] / (r * max_distance));
+      if (!(reverse >= best))  // also when best is NaN
+      {
+        best = reverse;
+        dir = -1;
+      }
+    }
+  }
+  if (direction)
+    *direction = dir;
+  return best;
+}
+
+void SequenceMatcher::normalizedRow(std::vector<float>& out, std::vector<int8_t>* directions) const
+{
+  out.resize(columns());
+  if (directions)
+    directions->resize(columns());
+  for (size_t c = 0; c < columns(); ++c)
+  {
+    int dir = 1;
+    out[c] = normalized(c, &dir);
+    if (directions)
+      (*directions)[c] = static_cast<int8_t>(dir);
+  }
+}
+
+}  // namespace openable
