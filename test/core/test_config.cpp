@@ -1,0 +1,124 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "openable/config.h"
+#include "openable/error.h"
+
+using namespace openable;
+
+namespace
+{
+bool anyErrorMentions(const std::vector<std::string>& errors, const std::string& a, const std::string& b)
+{
+  for (const auto& e : errors)
+    if (e.find(a) != std::string::npos && e.find(b) != std::string::npos)
+      return true;
+  return false;
+}
+}  // namespace
+
+TEST(Config, DefaultsAreThePapersAndValid)
+{
+  const Config c;
+  EXPECT_EQ(c.camera_type, "mono");
+  EXPECT_EQ(c.description_type, "global");
+  EXPECT_EQ(c.patch_size, 64);
+  EXPECT_EQ(c.grid_x, 1);
+  EXPECT_EQ(c.grid_y, 1);
+  EXPECT_EQ(c.panoramas, 6);
+  EXPECT_FALSE(c.illumination_invariance);
+  EXPECT_DOUBLE_EQ(c.alpha, 0.47);
+  EXPECT_EQ(c.descriptor, "LDB");
+  EXPECT_EQ(c.sequence_length, 1);
+  EXPECT_DOUBLE_EQ(c.threshold, -1.0);
+  EXPECT_EQ(c.color_map, 7);
+  EXPECT_TRUE(c.validate().empty());
+}
+
+TEST(Config, DefaultYamlFileHoldsEveryKeyWithItsDefault)
+{
+  const Config file = Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml");
+  const Config defaults;
+  for (const auto& key : Config::keys())
+    EXPECT_EQ(file.get(key.name), defaults.get(key.name)) << key.name;
+  std::ifstream in(std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& key : Config::keys())
+    EXPECT_NE(text.find("\n" + key.name + ":"), std::string::npos) << key.name << " is not documented";
+}
+
+TEST(Config, SetGetAndYamlRoundTrip)
+{
+  Config c;
+  c.set("sequence_length", "25");
+  c.set("illumination_invariance", "true");
+  c.set("threshold", "0.125");
+  c.set("descriptor", "ORB");
+  EXPECT_EQ(c.sequence_length, 25);
+  EXPECT_TRUE(c.illumination_invariance);
+  EXPECT_DOUBLE_EQ(c.threshold, 0.125);
+  const Config back = Config::fromYamlString(c.toYaml());
+  for (const auto& key : Config::keys())
+    EXPECT_EQ(back.get(key.name), c.get(key.name)) << key.name;
+}
+
+TEST(Config, UnknownKeyAndWrongTypeAreClearErrors)
+{
+  Config c;
+  try
+  {
+    c.set("sequence_lenght", "3");
+    FAIL();
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("sequence_lenght"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("sequence_length"), std::string::npos);  // lists the known keys
+  }
+  EXPECT_THROW(c.set("patch_size", "big"), Error);
+  EXPECT_THROW(c.set("patch_size", "64.5"), Error);
+  EXPECT_THROW(c.set("illumination_invariance", "maybe"), Error);
+  EXPECT_THROW(Config::fromYamlString("patch_size: [1, 2]"), Error);
+  EXPECT_THROW(Config::fromYamlString("- a\n- b"), Error);
+  EXPECT_THROW(Config::fromYamlString("patch_size: [1, 2"), Error);
+  EXPECT_THROW(Config::fromYamlFile("/nonexistent/config.yaml"), Error);
+}
+
+TEST(Config, ValidateNamesKeyValueAndAllowedValues)
+{
+  Config c;
+  c.camera_type = "fisheye";
+  c.sequence_length = 0;
+  c.threshold = 1.5;
+  c.descriptor = "AKAZE";
+  c.patch_size = 4;
+  c.color_map = 12;
+  const auto errors = c.validate();
+  EXPECT_TRUE(anyErrorMentions(errors, "camera_type", "mono | stereo | panoramic"));
+  EXPECT_TRUE(anyErrorMentions(errors, "sequence_length", "'0'"));
+  EXPECT_TRUE(anyErrorMentions(errors, "threshold", "-1 (off) or a number in [0, 1]"));
+  EXPECT_TRUE(anyErrorMentions(errors, "descriptor", "LDB"));
+  EXPECT_TRUE(anyErrorMentions(errors, "patch_size", "[8, 1024]"));
+  EXPECT_TRUE(anyErrorMentions(errors, "color_map", "[0, 11]"));
+  EXPECT_THROW(c.validateOrThrow(), Error);
+
+  Config stereo_descriptor_in_mono;
+  stereo_descriptor_in_mono.descriptor = "D-LDB";
+  EXPECT_TRUE(anyErrorMentions(stereo_descriptor_in_mono.validate(), "descriptor", "camera_type stereo"));
+
+  Config threshold_nan;
+  threshold_nan.threshold = std::nan("");
+  EXPECT_FALSE(threshold_nan.validate().empty());
+  Config threshold_negative;
+  threshold_negative.threshold = -0.5;
+  EXPECT_FALSE(threshold_negative.validate().empty());
+}
+
+TEST(Config, AlphaFromPeakWavelengthsReproducesKittiValue)
+{
+  // Paper: PointGrey Flea2 with peaks at 610, 535 and 470 nm gives alpha = 0.47.
+  EXPECT_NEAR(alphaFromWavelengths(610, 535, 470), 0.4706, 1e-4);
+  EXPECT_THROW(alphaFromWavelengths(0, 535, 470), Error);
+}

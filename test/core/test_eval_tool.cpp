@@ -1,0 +1,207 @@
+// openable_eval end to end: runs the built binary on small .npy files written here and checks what it
+// writes and prints, and that bad input gives a non-zero exit with a one-line reason.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "openable/evaluation.h"
+#include "openable/npy.h"
+
+#ifndef OPENABLE_EVAL_BINARY
+#error "OPENABLE_EVAL_BINARY (path of the openable_eval executable) must be defined by the build"
+#endif
+
+namespace fs = std::filesystem;
+
+namespace
+{
+const std::string kKitti = OPENABLE_SOURCE_DIR "/../shared/data/kitti";
+
+std::string readText(const std::string& path)
+{
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+std::vector<std::string> lines(const std::string& text)
+{
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);)
+    out.push_back(line);
+  return out;
+}
+
+struct ToolRun
+{
+  int status = -1;
+  std::string out;
+  std::string err;
+};
+
+class EvalToolTest : public ::testing::Test
+{
+protected:
+  void SetUp() override
+  {
+    dir_ = fs::temp_directory_path() /
+           ("openable_test_eval_tool_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // The hand-computed four-by-four of test_evaluation.cpp: AUC 5/12, max recall at 100 % 0.25, R@1 0.5.
+    matrix_ = (cv::Mat_<float>(4, 4) << 0.1F, 0.5F, 0.9F, 0.9F, 0.2F, 0.8F, 0.9F, 0.9F, 0.9F, 0.9F, 0.3F, 0.9F,
+               0.9F, 0.4F, 0.9F, 0.9F);
+    openable::writeNpy(path("m.npy"), matrix_);
+  }
+  void TearDown() override
+  {
+    fs::remove_all(dir_);
+  }
+  std::string path(const std::string& name) const
+  {
+    return (dir_ / name).string();
+  }
+  /// Runs openable_eval with `arguments` (already shell-quoted where needed).
+  ToolRun run(const std::string& arguments) const
+  {
+    const std::string command = std::string("'") + OPENABLE_EVAL_BINARY + "' " + arguments + " >'" + path("stdout") +
+                                "' 2>'" + path("stderr") + "'";
+    const int raw = std::system(command.c_str());
+    ToolRun r;
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = readText(path("stdout"));
+    r.err = readText(path("stderr"));
+    return r;
+  }
+  fs::path dir_;
+  cv::Mat matrix_;
+};
+
+}  // namespace
+
+TEST_F(EvalToolTest, WritesCurvePlotAndMetricsAndPrintsThem)
+{
+  const ToolRun r = run("--matrix '" + path("m.npy") + "' --tolerance 0 --output '" + path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> printed = lines(r.out);
+  ASSERT_EQ(printed.size(), 4u) << r.out;
+  EXPECT_EQ(printed[0], "auc: 0.416667");
+  EXPECT_EQ(printed[1], "max_recall_at_100_precision: 0.25");
+  EXPECT_EQ(printed[2], "recall_at_1: 0.5");
+  EXPECT_EQ(printed[3], "{\"name\": \"m\", \"auc\": 0.416667, \"max_recall_at_100_precision\": 0.25, \"recall_at_1\": 0.5, "
+                       "\"evaluated_queries\": 4, \"positive_queries\": 4, \"masked_queries\": 0, "
+                       "\"queries_without_prediction\": 0, \"auc_rule\": \"step-wise average precision\", "
+                       "\"ground_truth\": \"aligned traversals, |i - j| <= 0\"}");
+  EXPECT_EQ(readText(path("out/metrics.json")), printed[3] + "\n");
+  EXPECT_EQ(readText(path("out/pr_curve.csv")),
+            "threshold,precision,recall\n0.100000001,1,0.25\n0.200000003,0.5,0.25\n0.300000012,0.666666667,0.5\n"
+            "0.400000006,0.5,0.5\n");
+  const cv::Mat plot = cv::imread(path("out/pr_curve.png"));
+  EXPECT_EQ(plot.size(), cv::Size(800, 600));
+  EXPECT_TRUE(r.err.empty()) << r.err;
+}
+
+TEST_F(EvalToolTest, AcceptsAFolderAMaskAndPairs)
+{
+  fs::create_directories(path("run"));
+  openable::writeNpy(path("run/distance_matrix.npy"), matrix_);
+  // Leave out the two wrong queries (1 and 3): every prediction is right.
+  openable::saveQueryMask(path("mask.txt"), { true, false, true, false });
+  std::ofstream(path("pairs.txt")) << "# shape=4x4\n0 0\n1 1\n2 2\n3 3\n";
+  const ToolRun r = run("--matrix '" + path("run") + "' --mask '" + path("mask.txt") + "' --pairs '" + path("pairs.txt") +
+                    "' --output '" + path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> printed = lines(r.out);
+  ASSERT_EQ(printed.size(), 4u);
+  EXPECT_EQ(printed[0], "auc: 1");
+  EXPECT_EQ(printed[1], "max_recall_at_100_precision: 1");
+  EXPECT_EQ(printed[2], "recall_at_1: 1");
+  EXPECT_NE(printed[3].find("\"name\": \"run\""), std::string::npos);
+  EXPECT_NE(printed[3].find("\"masked_queries\": 2"), std::string::npos);
+}
+
+TEST_F(EvalToolTest, OverlaysSeveralMatrices)
+{
+  cv::Mat perfect(4, 4, CV_32F, cv::Scalar(1.0F));
+  perfect.diag().setTo(0.0F);
+  openable::writeNpy(path("p.npy"), perfect);
+  const ToolRun r = run("--matrix '" + path("m.npy") + "' --name 'ldb global' --matrix '" + path("p.npy") +
+                    "' --name perfect --tolerance 0 --output '" + path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> printed = lines(r.out);
+  ASSERT_EQ(printed.size(), 9u) << r.out;
+  EXPECT_EQ(printed[0], "name: ldb global");
+  EXPECT_EQ(printed[1], "auc: 0.416667");
+  EXPECT_EQ(printed[4], "name: perfect");
+  EXPECT_EQ(printed[5], "auc: 1");
+  EXPECT_EQ(printed[8].front(), '[');
+  EXPECT_TRUE(fs::exists(path("out/pr_curve_ldb_global.csv")));
+  EXPECT_TRUE(fs::exists(path("out/pr_curve_perfect.csv")));
+  EXPECT_EQ(cv::imread(path("out/pr_curve.png")).size(), cv::Size(800, 600));
+}
+
+TEST_F(EvalToolTest, ComparesPosesWithThePublishedKittiGroundTruth)
+{
+  const ToolRun r = run("--poses '" + kKitti + "/poses/06.txt' --compare '" + kKitti +
+                    "/loop_ground_truth/kitti06GroundTruth.txt'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> printed = lines(r.out);
+  ASSERT_EQ(printed.size(), 2u);
+  // Measured: at the defaults (6 m, 100 frames) every pose loop is a published one, 3253 of 3287.
+  EXPECT_EQ(printed[1], "6,100,3253,3287,3253,1,0.989656,0.989656,271,272,271,0.996324");
+}
+
+TEST_F(EvalToolTest, BadInputGivesANonZeroExitAndOneLineReason)
+{
+  std::ofstream(path("far.txt")) << "2 9\n";
+  ToolRun r = run("--matrix '" + path("m.npy") + "' --pairs '" + path("far.txt") + "' --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("needs at least 3x10"), std::string::npos) << r.err;
+
+  r = run("--matrix '" + path("missing.npy") + "' --tolerance 2 --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("cannot open"), std::string::npos) << r.err;
+
+  std::ofstream(path("text.npy")) << "not a matrix\n";
+  r = run("--matrix '" + path("text.npy") + "' --tolerance 2 --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("not a .npy file"), std::string::npos) << r.err;
+
+  r = run("--matrix '" + path("m.npy") + "' --poses '" + kKitti + "/poses/06.txt' --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("is for a 1101x1101 matrix, but the distance matrix is 4x4"), std::string::npos) << r.err;
+
+  r = run("--matrix '" + path("m.npy") + "' --tolerance 2 --pairs '" + path("far.txt") + "' --output x");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("exactly one ground truth"), std::string::npos) << r.err;
+
+  r = run("--matrix '" + path("m.npy") + "' --tolerance two --output x");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+
+  r = run("--bogus");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_FALSE(fs::exists(path("out/metrics.json")));
+}
+
+TEST_F(EvalToolTest, HelpDocumentsEveryOption)
+{
+  const ToolRun r = run("--help");
+  EXPECT_EQ(r.status, 0);
+  for (const char* option : { "--matrix", "--name", "--mask", "--mask-dark", "--tolerance", "--pairs",
+                              "--pair-tolerance", "--poses", "--distance", "--exclusion", "--output", "--compare",
+                              "--sweep", "step-wise average precision" })
+  {
+    EXPECT_NE(r.out.find(option), std::string::npos) << option;
+  }
+}

@@ -1,0 +1,87 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "openable/error.h"
+#include "openable/hamming.h"
+#include "test_util.h"
+
+using namespace openable;
+using openable_test::naiveBitCount;
+using openable_test::randomWords;
+
+TEST(Hamming, EveryKernelEqualsNaiveBitCountOnRandomDataOfManyLengths)
+{
+  std::mt19937_64 rng(7);
+  const auto kernels = supportedKernels();
+  ASSERT_GE(kernels.size(), 1u);
+  for (size_t words = 0; words <= 70; ++words)
+    for (int trial = 0; trial < 20; ++trial)
+    {
+      const auto a = randomWords(rng, words);
+      auto b = randomWords(rng, words);
+      if (trial == 0)
+        b = a;  // distance 0
+      if (trial == 1)
+        for (size_t i = 0; i < words; ++i)
+          b[i] = ~a[i];  // every bit differs
+      const uint32_t expected = naiveBitCount(a.data(), b.data(), words);
+      for (HammingKernel k : kernels)
+        ASSERT_EQ(hamming(k, a.data(), b.data(), words), expected) << kernelName(k) << " words=" << words;
+      ASSERT_EQ(hamming(a.data(), b.data(), words), expected);
+    }
+}
+
+TEST(Hamming, RowKernelsEqualPairwiseDistancesWithStride)
+{
+  std::mt19937_64 rng(11);
+  for (size_t words : { 1u, 3u, 4u, 8u, 22u, 44u })
+  {
+    const size_t stride = words + 2;  // rows need not be packed
+    const size_t count = 37;
+    const auto query = randomWords(rng, words);
+    const auto rows = randomWords(rng, stride * count);
+    for (HammingKernel k : supportedKernels())
+    {
+      std::vector<uint32_t> out(count);
+      hammingRow(k, query.data(), rows.data(), stride, words, count, out.data());
+      for (size_t i = 0; i < count; ++i)
+        ASSERT_EQ(out[i], naiveBitCount(query.data(), rows.data() + i * stride, words)) << kernelName(k);
+    }
+  }
+}
+
+TEST(Hamming, BestKernelIsTheLastSupportedAndPortableAlwaysExists)
+{
+  const auto kernels = supportedKernels();
+  EXPECT_EQ(kernels.front(), HammingKernel::kPortable);
+  EXPECT_EQ(bestKernel(), kernels.back());
+  for (HammingKernel k : { HammingKernel::kPortable, HammingKernel::kPopcnt, HammingKernel::kAvx2,
+                           HammingKernel::kAvx512Vpopcntdq })
+    EXPECT_FALSE(kernelName(k).empty());
+}
+
+TEST(Hamming, UnsupportedKernelIsAClearError)
+{
+  const auto kernels = supportedKernels();
+  if (std::find(kernels.begin(), kernels.end(), HammingKernel::kAvx512Vpopcntdq) != kernels.end())
+    return;  // this CPU runs every kernel: nothing to refuse (the other tests cover all of them)
+  const uint64_t a = 1, b = 2;
+  try
+  {
+    hamming(HammingKernel::kAvx512Vpopcntdq, &a, &b, 1);
+    FAIL() << "expected an error";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("not supported"), std::string::npos);
+  }
+}
+
+TEST(Hamming, L2DistanceKnownAnswer)
+{
+  const float a[] = { 0, 0, 0 };
+  const float b[] = { 1, 2, 2 };
+  EXPECT_FLOAT_EQ(l2Distance(a, b, 3), 3.0f);
+  EXPECT_FLOAT_EQ(l2Distance(b, b, 3), 0.0f);
+}

@@ -1,0 +1,166 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "openable/error.h"
+#include "openable/loop_detector.h"
+#include "test_util.h"
+
+using namespace openable;
+
+namespace
+{
+/// A stream of random LDB-sized descriptors that revisits frames 10..29 at frames 60..79.
+std::vector<FrameDescriptor> revisitingStream()
+{
+  std::mt19937_64 rng(21);
+  std::vector<FrameDescriptor> frames;
+  for (int i = 0; i < 90; ++i)
+  {
+    if (i >= 60 && i < 80)
+    {
+      FrameDescriptor d = frames[i - 50];
+      d[0] ^= rng() & 0xFF;  // a few bits of noise: nearly the same place
+      frames.push_back(d);
+    }
+    else
+      frames.push_back(openable_test::randomWords(rng, 22));
+  }
+  return frames;
+}
+}  // namespace
+
+TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
+{
+  Config c;
+  c.sequence_length = 5;
+  c.exclusion_window = 20;
+  c.threshold = 0.2;
+  LoopDetector detector(c);
+  const auto frames = revisitingStream();
+  int accepted = 0;
+  for (int i = 0; i < 90; ++i)
+  {
+    const Detection d = detector.process(frames[i]);
+    EXPECT_EQ(d.query_id, uint64_t(i));
+    EXPECT_EQ(d.has_candidates, i > c.exclusion_window);
+    if (i >= 64 && i < 80)  // full sequences inside the revisit
+    {
+      EXPECT_TRUE(d.accepted) << i;
+      EXPECT_EQ(d.best.id, uint64_t(i - 50));
+      EXPECT_LT(d.best.distance, 0.02f);
+      EXPECT_EQ(d.best.sequence_length, 5);
+      EXPECT_GT(d.uniqueness, 0.9f);
+      EXPECT_EQ(d.best.direction, 1);
+    }
+    if (i < 60)
+    {
+      EXPECT_FALSE(d.accepted) << i;  // random descriptors are ~0.5 apart
+    }
+    accepted += d.accepted;
+  }
+  EXPECT_GE(accepted, 16);
+  EXPECT_LE(accepted, 22);
+}
+
+TEST(LoopDetector, TopKAreDistinctPlacesBestFirst)
+{
+  Config c;
+  c.top_k = 4;
+  c.uniqueness_window = 3;
+  c.exclusion_window = 0;
+  LoopDetector detector(c);
+  std::mt19937_64 rng(4);
+  for (int i = 0; i < 40; ++i)
+    detector.process(openable_test::randomWords(rng, 22));
+  const Detection d = detector.process(openable_test::randomWords(rng, 22));
+  ASSERT_EQ(d.top.size(), 4u);
+  for (size_t i = 1; i < d.top.size(); ++i)
+  {
+    EXPECT_LE(d.top[i - 1].distance, d.top[i].distance);
+    for (size_t j = 0; j < i; ++j)
+      EXPECT_GT(std::labs(long(d.top[i].id) - long(d.top[j].id)), 3);
+  }
+  EXPECT_EQ(d.best.id, d.top[0].id);
+}
+
+TEST(LoopDetector, LastRowHasNaNForExcludedFramesAndItself)
+{
+  Config c;
+  c.exclusion_window = 3;
+  LoopDetector detector(c);
+  std::mt19937_64 rng(8);
+  std::vector<float> row;
+  for (int i = 0; i < 10; ++i)
+    detector.process(openable_test::randomWords(rng, 22));
+  detector.lastRow(row);
+  ASSERT_EQ(row.size(), 10u);
+  for (size_t j = 0; j < 10; ++j)
+    EXPECT_EQ(std::isnan(row[j]), j >= 6) << j;  // frame 9 vs 0..5 compared; 6, 7, 8 excluded; 9 itself
+}
+
+TEST(LoopDetector, LocalisationModeMatchesAgainstAFixedMap)
+{
+  Config c;
+  c.sequence_length = 3;
+  std::mt19937_64 rng(6);
+  PlaceDatabase map(FrameDescriber(c).layout());
+  std::vector<FrameDescriptor> places;
+  for (int i = 0; i < 30; ++i)
+  {
+    places.push_back(openable_test::randomWords(rng, 22));
+    map.add(places.back());
+  }
+  LoopDetector detector(c, map);
+  EXPECT_TRUE(detector.localisationMode());
+  for (int i = 5; i < 15; ++i)
+  {
+    const Detection d = detector.process(places[i]);
+    EXPECT_EQ(d.best.id, uint64_t(i));
+    EXPECT_FLOAT_EQ(d.best.distance, 0.0f);
+  }
+  EXPECT_EQ(detector.database().size(), 30u);  // nothing added to the map
+
+  Config other = c;
+  other.descriptor = "ORB";
+  EXPECT_THROW(LoopDetector(other, map), Error);
+}
+
+TEST(LoopDetector, UpdateMatchingChangesLiveKeysAndRefusesDescriptorKeys)
+{
+  Config c;
+  LoopDetector detector(c);
+  Config live = c;
+  live.threshold = 0.3;
+  live.sequence_length = 8;
+  live.exclusion_window = 2;
+  detector.updateMatching(live);
+  EXPECT_EQ(detector.matcher().sequenceLength(), 8);
+  EXPECT_DOUBLE_EQ(detector.config().threshold, 0.3);
+  Config bad = live;
+  bad.patch_size = 32;
+  EXPECT_THROW(detector.updateMatching(bad), Error);
+  Config invalid = live;
+  invalid.sequence_length = 0;
+  EXPECT_THROW(detector.updateMatching(invalid), Error);
+  EXPECT_EQ(detector.matcher().sequenceLength(), 8);  // unchanged after a refusal
+}
+
+TEST(LoopDetector, ResetForgetsHistoryButKeepsIdsIncreasing)
+{
+  LoopDetector detector{ Config() };
+  std::mt19937_64 rng(10);
+  for (int i = 0; i < 5; ++i)
+    detector.process(openable_test::randomWords(rng, 22));
+  detector.reset();
+  EXPECT_EQ(detector.database().size(), 0u);
+  const Detection d = detector.process(openable_test::randomWords(rng, 22));
+  EXPECT_EQ(d.query_id, 5u);
+  EXPECT_FALSE(d.has_candidates);
+}
+
+TEST(LoopDetector, WrongDescriptorSizeIsAClearError)
+{
+  LoopDetector detector{ Config() };
+  EXPECT_THROW(detector.process(FrameDescriptor(3)), Error);
+}

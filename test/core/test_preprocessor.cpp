@@ -1,0 +1,166 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "openable/error.h"
+#include "openable/preprocessor.h"
+#include "test_util.h"
+
+using namespace openable;
+
+TEST(IlluminationInvariant, HandComputedPixels)
+{
+  // One BGR pixel (B=20, G=100, R=50) and a black one; alpha 0.47.
+  cv::Mat bgr(1, 2, CV_8UC3);
+  bgr.at<cv::Vec3b>(0, 0) = cv::Vec3b(20, 100, 50);
+  bgr.at<cv::Vec3b>(0, 1) = cv::Vec3b(0, 0, 0);
+  const cv::Mat out = illuminationInvariant(bgr, 0.47);
+  ASSERT_EQ(out.type(), CV_32FC1);
+  const double expected = std::log(100.0) - 0.47 * std::log(20.0) - 0.53 * std::log(50.0);
+  EXPECT_NEAR(out.at<float>(0, 0), expected, 1e-5);
+  EXPECT_FLOAT_EQ(out.at<float>(0, 1), 0.0f);  // zeros are treated as 1: log 1 = 0
+
+  // A zero channel next to non-zero ones: only that channel is replaced by 1.
+  cv::Mat partly_black(1, 1, CV_8UC3, cv::Scalar(0, 200, 10));
+  EXPECT_NEAR(illuminationInvariant(partly_black, 0.47).at<float>(0, 0), std::log(200.0) - 0.53 * std::log(10.0), 1e-5);
+}
+
+TEST(IlluminationInvariant, ScalingAllChannelsByOneFactorDoesNotChangeTheResult)
+{
+  // Eq. 6 with the coefficients 1 - alpha - (1 - alpha) = 0 cancels a global intensity factor.
+  cv::Mat a(1, 1, CV_8UC3, cv::Scalar(20, 60, 40));
+  cv::Mat b(1, 1, CV_8UC3, cv::Scalar(60, 180, 120));
+  EXPECT_NEAR(illuminationInvariant(a, 0.3).at<float>(0, 0), illuminationInvariant(b, 0.3).at<float>(0, 0), 1e-5);
+}
+
+TEST(IlluminationInvariant, GreyInputIsAClearError)
+{
+  Config c;
+  c.illumination_invariance = true;
+  const Preprocessor p(c);
+  try
+  {
+    p.patches(cv::Mat(10, 10, CV_8UC1, cv::Scalar(5)));
+    FAIL();
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("illumination_invariance"), std::string::npos);
+  }
+  EXPECT_THROW(illuminationInvariant(cv::Mat(3, 3, CV_8UC1), 0.47), Error);
+}
+
+TEST(Preprocessor, BadImagesAreClearErrors)
+{
+  const Preprocessor p{ Config() };
+  const std::vector<cv::Mat> bad = { cv::Mat(), cv::Mat(10, 10, CV_16UC1), cv::Mat(10, 10, CV_8UC2),
+                                     cv::Mat(10, 10, CV_32FC1), cv::Mat(10, 10, CV_8UC(5)) };
+  for (const auto& image : bad)
+  {
+    try
+    {
+      p.patches(image);
+      FAIL() << "accepted a bad image";
+    }
+    catch (const Error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("expected"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Preprocessor, GlobalPatchIsTheAreaAverageOfTheImage)
+{
+  Config c;
+  c.patch_size = 8;
+  const Preprocessor p(c);
+  cv::Mat image(32, 64, CV_8UC3, cv::Scalar(10, 20, 30));
+  image(cv::Rect(0, 0, 32, 32)).setTo(cv::Scalar(200, 200, 200));
+  const auto patches = p.patches(image);
+  ASSERT_EQ(patches.size(), 1u);
+  ASSERT_EQ(patches[0].intensity.size(), cv::Size(8, 8));
+  ASSERT_EQ(patches[0].intensity.type(), CV_32FC1);
+  EXPECT_FLOAT_EQ(patches[0].intensity.at<float>(0, 0), 200.0f);
+  // Grey of (B, G, R) = (10, 20, 30) with OpenCV's BT.601 weights, rounded to 8 bits.
+  EXPECT_NEAR(patches[0].intensity.at<float>(7, 7), 0.114 * 10 + 0.587 * 20 + 0.299 * 30, 0.5);
+}
+
+TEST(Preprocessor, GridAndPanoramaCellLayout)
+{
+  Config c;
+  c.patch_size = 16;
+  c.description_type = "grid";
+  c.grid_x = 2;
+  c.grid_y = 3;
+  cv::Mat image(60, 80, CV_8UC1);
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x)
+      image.at<uint8_t>(y, x) = static_cast<uint8_t>((x / 40) * 100 + (y / 20) * 10);  // cell id in the value
+  const auto cells = Preprocessor(c).patches(image);
+  ASSERT_EQ(cells.size(), 6u);
+  for (int gy = 0; gy < 3; ++gy)
+    for (int gx = 0; gx < 2; ++gx)
+    {
+      EXPECT_FLOAT_EQ(cells[gy * 2 + gx].intensity.at<float>(8, 8), gx * 100 + gy * 10);
+      EXPECT_EQ(cells[gy * 2 + gx].intensity.size(), cv::Size(16, 16));
+    }
+
+  c.camera_type = "panoramic";
+  c.panoramas = 4;
+  c.description_type = "global";
+  c.grid_x = c.grid_y = 1;
+  cv::Mat panorama(20, 80, CV_8UC1);
+  for (int x = 0; x < 80; ++x)
+    panorama.col(x).setTo(x / 20 * 50);
+  const auto subs = Preprocessor(c).patches(panorama);
+  ASSERT_EQ(subs.size(), 4u);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_FLOAT_EQ(subs[i].intensity.at<float>(5, 5), i * 50);
+  // A panorama narrower than the number of sub-panoramas cannot be split.
+  EXPECT_THROW(Preprocessor(c).patches(cv::Mat(20, 3, CV_8UC1)), Error);
+}
+
+TEST(Preprocessor, MultiCameraRingGivesOneSubPanoramaPerCamera)
+{
+  Config c;
+  c.camera_type = "panoramic";
+  c.panoramas = 3;
+  c.patch_size = 16;
+  std::vector<cv::Mat> ring;
+  for (int i = 0; i < 3; ++i)
+    ring.emplace_back(30, 40, CV_8UC1, cv::Scalar(i * 60));
+  const auto cells = Preprocessor(c).patchesFromCameras(ring);
+  ASSERT_EQ(cells.size(), 3u);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_FLOAT_EQ(cells[i].intensity.at<float>(3, 3), i * 60);
+  ring.pop_back();
+  EXPECT_THROW(Preprocessor(c).patchesFromCameras(ring), Error);
+}
+
+TEST(Preprocessor, DisparityIsAveragedOverValidPixelsAndScaledToThePatch)
+{
+  Config c;
+  c.camera_type = "stereo";
+  c.patch_size = 8;
+  const Preprocessor p(c);
+  cv::Mat left(32, 32, CV_8UC1, cv::Scalar(100));
+  cv::Mat disparity(32, 32, CV_32F, cv::Scalar(20.0f));
+  disparity(cv::Rect(0, 0, 16, 32)).setTo(std::nanf(""));  // left half invalid
+  disparity.at<float>(20, 20) = -1.0f;                     // one negative (invalid) value
+  const auto patches = p.patchesWithDisparity(left, disparity);
+  ASSERT_EQ(patches.size(), 1u);
+  const cv::Mat& d = patches[0].disparity;
+  const cv::Mat& valid = patches[0].valid;
+  EXPECT_EQ(valid.at<uint8_t>(0, 0), 0);
+  EXPECT_FLOAT_EQ(d.at<float>(0, 0), 0.0f);  // never a huge value
+  EXPECT_EQ(valid.at<uint8_t>(0, 7), 255);
+  EXPECT_FLOAT_EQ(d.at<float>(0, 7), 20.0f * 8 / 32);  // in patch pixels
+  EXPECT_FLOAT_EQ(d.at<float>(5, 5), 20.0f * 8 / 32);  // the -1 pixel was left out of the average
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x)
+      EXPECT_TRUE(std::isfinite(d.at<float>(y, x)));
+  EXPECT_THROW(p.patchesWithDisparity(left, cv::Mat(32, 32, CV_16SC1)), Error);
+  EXPECT_THROW(p.patchesWithDisparity(left, cv::Mat(16, 32, CV_32FC1)), Error);
+}
