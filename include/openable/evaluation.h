@@ -86,8 +86,8 @@ std::vector<cv::Vec3d> loadKittiPositions(const std::string& path);
 
 /// Defaults for loops from poses, chosen by comparing with the published ground truth of KITTI 00, 05 and
 /// 06 (doc/results.md, "KITTI ground truth from poses").
-constexpr double kDefaultLoopDistance = 5.0;
-constexpr int kDefaultLoopExclusion = 50;
+constexpr double kDefaultLoopDistance = 6.0;
+constexpr int kDefaultLoopExclusion = 100;
 
 /// Loops of one sequence from its positions: frame i closes a loop with an earlier frame j when
 /// |p_i - p_j| < distance (metres) and i - j > exclusion (frames). Only earlier frames, like the

@@ -237,8 +237,11 @@ cv::Mat readNpy(const std::string& path)
   const int cols = static_cast<int>(header.shape[1]);
   const size_t item = header.descr == "'<f4'" ? 4 : 8;
   // Checked against the file size before allocating, so a corrupt shape cannot ask for terabytes.
-  const uint64_t expected = header.shape[0] * header.shape[1] * item;
+  // Dims are < 2^31 each, so the product of three factors (<= 2^65) is formed in two checked steps.
   const uint64_t available = bytes.size() - header.data_offset;
+  const uint64_t cells = header.shape[0] * header.shape[1];
+  const bool overflows = cells > UINT64_MAX / item;
+  const uint64_t expected = overflows ? UINT64_MAX : cells * item;
   if (available != expected)
   {
     throw Error("npy: '" + path + "' holds " + std::to_string(available) + " data bytes but its shape (" +

@@ -50,8 +50,8 @@ Ground truth (exactly one):
   --pair-tolerance K   with --pairs: query i also matches references within K frames of j (default 0).
   --poses FILE         KITTI poses (row-major 3x4 per line): frame i closes a loop with earlier frame j
                        when they are closer than D metres and more than E frames apart.
-  --distance D         with --poses: metres (default 5).
-  --exclusion E        with --poses: frames (default 50). The defaults reproduce the published ground
+  --distance D         with --poses: metres (default 6).
+  --exclusion E        with --poses: frames (default 100). The defaults reproduce the published ground
                        truth of KITTI 00, 05 and 06 best (doc/results.md).
 
 Output:
@@ -329,7 +329,7 @@ int compareGroundTruth(const Options& o)
   }
   double best_iou = -1.0, best_distance = 0.0;
   int best_exclusion = 0;
-  for (double distance = 1.0; distance <= 20.0; distance += 1.0)
+  for (double distance = 1.0; distance <= 20.0; distance += 0.5)
   {
     for (int exclusion : { 0, 10, 25, 50, 75, 100, 150, 200, 300, 500 })
     {
