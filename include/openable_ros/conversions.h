@@ -1,0 +1,37 @@
+#pragma once
+
+#include <array>
+#include <string>
+
+#include <geometry_msgs/Pose.h>
+#include <opencv2/core.hpp>
+#include <sensor_msgs/Image.h>
+#include <std_msgs/Header.h>
+
+#include "openable/loop_detector.h"
+#include "openable/place_database.h"
+#include "openable_ros/LoopClosure.h"
+
+namespace openable_ros
+{
+/// Encodings the detectors describe: 8-bit grey and colour, and mono16 (scaled to 8 bits). Depth and
+/// float images (16UC1, 32FC1, ...) are not camera intensity and are refused.
+bool isSupportedEncoding(const std::string& encoding);
+const char* supportedEncodings();
+
+/// A camera image as the core wants it: 8-bit grey (mono8) or 8-bit BGR, shared with the message when
+/// possible (the result must not be modified). Returns false with `error` naming the encoding or size
+/// problem and what is expected. Never throws.
+bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::string& error);
+
+/// A stereo_msgs/DisparityImage's image (32FC1) as CV_32F, shared with the message. Never throws.
+bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, std::string& error);
+
+geometry_msgs::Pose toPoseMsg(const std::array<double, 7>& pose);
+
+/// One accepted loop closure as a message: header of the query image, ids, stamps, sessions, distance,
+/// uniqueness, direction, shift and the poses of both frames when both are known.
+LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::Detection& detection,
+                               const openable::FrameInfo& query, const openable::FrameInfo* match);
+
+}  // namespace openable_ros

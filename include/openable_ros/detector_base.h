@@ -1,0 +1,194 @@
+#pragma once
+
+#include <array>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
+#include <geometry_msgs/Point.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <std_msgs/Header.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "openable/config.h"
+#include "openable/distance_matrix_view.h"
+#include "openable/frame_describer.h"
+#include "openable/loop_detector.h"
+#include "openable_ros/DetectorConfig.h"
+#include "openable_ros/LoadMap.h"
+#include "openable_ros/SaveMap.h"
+
+namespace openable_ros
+{
+/// What the three detector nodelets share: the core LoopDetector and FrameDescriber, the outputs
+/// (loop_closures, distance_matrix, loop_markers, diagnostics), the services (~save_map, ~load_map,
+/// ~reset), dynamic_reconfigure, tf poses and keyframing. A derived nodelet only subscribes to its inputs
+/// and, per synchronised input set, turns the messages into a descriptor through processFrame().
+///
+/// Threading: every entry point (frame callbacks, services, dynamic_reconfigure, diagnostics) takes
+/// mutex_, so the nodelet is safe on a multi-threaded callback queue too.
+class DetectorBase : public nodelet::Nodelet
+{
+public:
+  DetectorBase();
+  ~DetectorBase() override;
+
+protected:
+  /// Reads the parameters (core keys and ROS-only ones, explaining every fallback), builds the detector
+  /// (from ~map_file when it exists), advertises outputs and services, starts dynamic_reconfigure and
+  /// diagnostics. `defaults` is the nodelet's configuration before parameters (its camera_type...).
+  /// Returns false after logging why when the detector cannot be built: the nodelet then stays loaded
+  /// but idle (never throws: that would take the whole manager down).
+  bool setupDetector(const openable::Config& defaults);
+
+  /// Turns the preprocessed input into a descriptor; throws openable::Error / cv::Exception on bad input.
+  using DescribeFunction = std::function<openable::FrameDescriptor(const openable::FrameDescriber&)>;
+
+  /// One synchronised input set: checks the stamp (time jumps), decides whether it is a keyframe (tf),
+  /// describes it (timed), matches it, publishes loop closures, updates the distance matrix and markers.
+  /// `topic` names the input in warnings and in the stored frame's source. Never throws.
+  void processFrame(const std_msgs::Header& header, const std::string& topic, const DescribeFunction& describe);
+
+  /// Counts a rejected input under `reason` (shown in diagnostics) and warns, throttled per reason.
+  void rejectFrame(const std::string& reason, const std::string& message);
+  /// NODELET_WARN at most once per `period` seconds per `key` (members, not macro statics: several
+  /// nodelets in one manager must not silence each other).
+  void warnThrottled(const std::string& key, double period, const std::string& message);
+
+  /// Watches synchronised inputs: warns every ~sync_warning_timeout seconds while no complete set arrived,
+  /// naming each topic with the messages it received (rtabmap's SyncDiagnostic idea). Call noteInput()
+  /// from each input's own callback and noteSynchronised() when a set is complete.
+  void startSyncWatchdog(const std::vector<std::string>& topics, const std::string& advice);
+  void noteInput(size_t index);
+  void noteSynchronised();
+
+  /// Input queue size for subscribers (~queue_size).
+  int queueSize() const
+  {
+    return queue_size_;
+  }
+  /// The configuration in use (after parameter validation).
+  const openable::Config& config() const
+  {
+    return config_;
+  }
+  /// Seconds without a complete input set after which derived nodelets warn (~sync_warning_timeout).
+  double syncWarningTimeout() const
+  {
+    return sync_warning_timeout_;
+  }
+
+private:
+  struct Latency
+  {
+    double last_ms = 0.0;
+    double total_ms = 0.0;
+    uint64_t count = 0;
+    void add(double ms)
+    {
+      last_ms = ms;
+      total_ms += ms;
+      ++count;
+    }
+    double mean() const
+    {
+      return count ? total_ms / double(count) : 0.0;
+    }
+  };
+
+  bool loadMapLocked(const std::string& path, std::string& message);
+  bool checkTimeLocked(const std_msgs::Header& header, const std::string& topic);
+  /// Camera pose in ~fixed_frame at the header's stamp; false (with a throttled warning) without tf.
+  bool lookupPoseLocked(const std_msgs::Header& header, std::array<double, 7>& pose);
+  bool isKeyframeLocked(bool has_pose, const std::array<double, 7>& pose);
+  void publishLoopLocked(const std_msgs::Header& header, const openable::Detection& detection,
+                         const openable::FrameInfo& query);
+  void publishMatrixLocked(const std_msgs::Header& header);
+  void publishMarkersLocked(const std_msgs::Header& header, bool force);
+  void resetStreamLocked();
+  void reconfigure(DetectorConfig& config, uint32_t level);
+  bool saveMap(SaveMap::Request& request, SaveMap::Response& response);
+  bool loadMap(LoadMap::Request& request, LoadMap::Response& response);
+  bool reset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  std::mutex mutex_;
+  bool ready_ = false;
+  openable::Config config_;
+  std::unique_ptr<openable::FrameDescriber> describer_;
+  std::unique_ptr<openable::LoopDetector> detector_;
+  openable::DistanceMatrixView view_;
+
+  // ROS-only parameters.
+  std::string fixed_frame_;
+  std::string map_file_;
+  double tf_timeout_ = 0.05;
+  double keyframe_distance_ = 0.0;
+  double keyframe_angle_ = 0.0;
+  bool reset_on_time_jump_ = false;
+  double matrix_rate_ = 2.0;
+  bool matrix_threshold_view_ = false;
+  double markers_rate_ = 1.0;
+  int queue_size_ = 10;
+  double sync_warning_timeout_ = 5.0;
+  uint32_t session_ = 0;
+
+  // Outputs and services.
+  ros::Publisher loop_pub_;
+  ros::Publisher markers_pub_;
+  std::unique_ptr<image_transport::ImageTransport> image_transport_;
+  image_transport::Publisher matrix_pub_;
+  ros::ServiceServer save_srv_;
+  ros::ServiceServer load_srv_;
+  ros::ServiceServer reset_srv_;
+  std::unique_ptr<dynamic_reconfigure::Server<DetectorConfig>> reconfigure_server_;
+  boost::recursive_mutex reconfigure_mutex_;  // dynamic_reconfigure wants a boost mutex
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
+  ros::Timer diagnostics_timer_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+
+  // Stream state.
+  ros::Time last_stamp_;
+  ros::WallTime last_matrix_time_;
+  ros::WallTime last_markers_time_;
+  bool has_keyframe_pose_ = false;
+  std::array<double, 7> keyframe_pose_{ { 0, 0, 0, 0, 0, 0, 1 } };
+  std::vector<float> row_;
+  std::deque<geometry_msgs::Point> trajectory_;
+  std::deque<std::pair<geometry_msgs::Point, geometry_msgs::Point>> loop_edges_;
+  std::map<std::string, ros::WallTime> last_warning_;
+
+  // Synchronisation watchdog.
+  void checkSync();
+  std::vector<std::string> sync_topics_;
+  std::vector<uint64_t> sync_counts_;
+  std::string sync_advice_;
+  uint64_t sync_sets_ = 0;
+  ros::WallTime last_sync_time_;
+  ros::WallTimer sync_timer_;
+
+  // Diagnostics counters.
+  uint64_t frames_received_ = 0;
+  uint64_t frames_stored_ = 0;
+  uint64_t frames_skipped_keyframe_ = 0;
+  uint64_t loops_accepted_ = 0;
+  std::map<std::string, uint64_t> rejected_;
+  uint64_t received_at_last_diagnostic_ = 0;
+  uint64_t rejected_at_last_diagnostic_ = 0;
+  ros::WallTime last_diagnostic_time_;
+  Latency describe_latency_;
+  Latency match_latency_;
+};
+
+}  // namespace openable_ros

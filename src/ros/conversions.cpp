@@ -1,0 +1,142 @@
+#include "openable_ros/conversions.h"
+
+#include <boost/make_shared.hpp>
+#include <cv_bridge/cv_bridge.h>
+#include <opencv2/imgproc.hpp>
+#include <sensor_msgs/image_encodings.h>
+
+namespace openable_ros
+{
+namespace enc = sensor_msgs::image_encodings;
+
+bool isSupportedEncoding(const std::string& encoding)
+{
+  return encoding == enc::MONO8 || encoding == enc::TYPE_8UC1 || encoding == enc::BGR8 || encoding == enc::RGB8 ||
+         encoding == enc::BGRA8 || encoding == enc::RGBA8 || encoding == enc::TYPE_8UC3 ||
+         encoding == enc::TYPE_8UC4 || encoding == enc::MONO16;
+}
+
+const char* supportedEncodings()
+{
+  return "mono8, 8UC1, bgr8, rgb8, bgra8, rgba8, 8UC3, 8UC4 or mono16";
+}
+
+bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::string& error)
+{
+  if (msg->width == 0 || msg->height == 0)
+  {
+    error = "empty image (" + std::to_string(msg->width) + "x" + std::to_string(msg->height) + ")";
+    return false;
+  }
+  if (!isSupportedEncoding(msg->encoding))
+  {
+    error = "encoding '" + msg->encoding + "' is not supported; expected " + supportedEncodings();
+    return false;
+  }
+  if (size_t(msg->step) * msg->height > msg->data.size())
+  {
+    error = "image data holds " + std::to_string(msg->data.size()) + " bytes, but step x height = " +
+            std::to_string(size_t(msg->step) * msg->height);
+    return false;
+  }
+  try
+  {
+    const std::string& e = msg->encoding;
+    if (e == enc::MONO8 || e == enc::TYPE_8UC1 || e == enc::BGR8 || e == enc::TYPE_8UC3)
+    {
+      // No copy: the core only reads its input.
+      image = cv_bridge::toCvShare(msg)->image;
+    }
+    else if (e == enc::MONO16)
+    {
+      image = cv_bridge::toCvCopy(msg, enc::MONO8)->image;
+    }
+    else if (e == enc::TYPE_8UC4)
+    {
+      cv::cvtColor(cv_bridge::toCvShare(msg)->image, image, cv::COLOR_BGRA2BGR);
+    }
+    else
+    {
+      image = cv_bridge::toCvCopy(msg, enc::BGR8)->image;
+    }
+  }
+  catch (const cv_bridge::Exception& e)
+  {
+    error = std::string("cv_bridge could not convert it: ") + e.what();
+    return false;
+  }
+  catch (const cv::Exception& e)
+  {
+    error = std::string("OpenCV could not convert it: ") + e.what();
+    return false;
+  }
+  return true;
+}
+
+bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, std::string& error)
+{
+  if (msg.encoding != enc::TYPE_32FC1)
+  {
+    error = "disparity encoding '" + msg.encoding + "' is not supported; expected 32FC1 (stereo_msgs/DisparityImage)";
+    return false;
+  }
+  if (msg.width == 0 || msg.height == 0 || size_t(msg.step) * msg.height > msg.data.size() ||
+      msg.step < msg.width * sizeof(float))
+  {
+    error = "disparity image of " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " with step " +
+            std::to_string(msg.step) + " and " + std::to_string(msg.data.size()) + " bytes is malformed";
+    return false;
+  }
+  // The message outlives this call (the caller holds it), so a header over its data is enough.
+  disparity = cv::Mat(int(msg.height), int(msg.width), CV_32F, const_cast<uint8_t*>(msg.data.data()), msg.step);
+  return true;
+}
+
+geometry_msgs::Pose toPoseMsg(const std::array<double, 7>& pose)
+{
+  geometry_msgs::Pose out;
+  out.position.x = pose[0];
+  out.position.y = pose[1];
+  out.position.z = pose[2];
+  out.orientation.x = pose[3];
+  out.orientation.y = pose[4];
+  out.orientation.z = pose[5];
+  out.orientation.w = pose[6];
+  return out;
+}
+
+LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::Detection& detection,
+                               const openable::FrameInfo& query, const openable::FrameInfo* match)
+{
+  auto msg = boost::make_shared<LoopClosure>();
+  msg->header = header;
+  msg->query_id = uint32_t(detection.query_id);
+  msg->match_id = uint32_t(detection.best.id);
+  if (match)
+  {
+    msg->match_stamp = ros::Time(std::max(0.0, match->stamp));
+    msg->match_session = match->session;
+  }
+  msg->query_session = query.session;
+  msg->distance = detection.best.distance;
+  msg->uniqueness = detection.uniqueness;
+  msg->sequence_length = detection.best.sequence_length;
+  msg->direction = detection.best.direction;
+  msg->shift = detection.best.shift;
+  msg->has_poses = match && query.has_pose && match->has_pose;
+  if (msg->has_poses)
+  {
+    msg->query_pose = toPoseMsg(query.pose);
+    msg->match_pose = toPoseMsg(match->pose);
+  }
+  else
+  {
+    msg->query_pose.orientation.w = 1.0;
+    msg->match_pose.orientation.w = 1.0;
+  }
+  msg->has_relative_pose = false;
+  msg->relative_pose.pose.orientation.w = 1.0;
+  return msg;
+}
+
+}  // namespace openable_ros
