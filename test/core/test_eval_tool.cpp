@@ -129,6 +129,25 @@ TEST_F(EvalToolTest, AcceptsAFolderAMaskAndPairs)
   EXPECT_NE(printed[3].find("\"masked_queries\": 2"), std::string::npos);
 }
 
+TEST_F(EvalToolTest, MasksNearBlackQueryImages)
+{
+  // Query images 1 and 3 (the two wrong predictions) are near-black (mean 9 < 10), 0 and 2 are not (10).
+  fs::create_directories(path("queries"));
+  for (int i = 0; i < 4; ++i)
+  {
+    const cv::Mat image(32, 64, CV_8UC3, cv::Scalar::all(i % 2 == 1 ? 9 : 10));
+    ASSERT_TRUE(cv::imwrite(path("queries/frame_" + std::to_string(i) + ".png"), image));
+  }
+  const ToolRun r = run("--matrix '" + path("m.npy") + "' --mask-dark '" + path("queries") +
+                        "' --tolerance 0 --output '" + path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> printed = lines(r.out);
+  ASSERT_EQ(printed.size(), 4u);
+  EXPECT_EQ(printed[0], "auc: 1");
+  EXPECT_EQ(printed[2], "recall_at_1: 1");
+  EXPECT_EQ(openable::loadQueryMask(path("out/query_mask.txt")), (std::vector<bool>{ true, false, true, false }));
+}
+
 TEST_F(EvalToolTest, OverlaysSeveralMatrices)
 {
   cv::Mat perfect(4, 4, CV_32F, cv::Scalar(1.0F));
