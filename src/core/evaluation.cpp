@@ -667,8 +667,32 @@ void drawCurve(cv::Mat& image, const cv::Rect& area, const std::vector<PrPoint>&
   cv::polylines(image, points, false, colour, 2, cv::LINE_AA);
 }
 
-/// Legend in the lower left of the plot, where PR curves rarely pass (low recall and low precision).
-void drawLegend(cv::Mat& image, const cv::Rect& area, const std::vector<PrPlotSeries>& series, double scale)
+/// The corner of the plot area where a box of `size` covers the fewest curve pixels (`ink`, non-zero where
+/// a curve is drawn), so the legend hides as little as possible; lower right first, where PR curves
+/// rarely go (high recall at low precision).
+cv::Rect quietestCorner(const cv::Mat& ink, const cv::Rect& area, cv::Size size)
+{
+  const int margin = 10;
+  const int left = area.x + margin, right = area.x + area.width - margin - size.width;
+  const int top = area.y + margin, bottom = area.y + area.height - margin - size.height;
+  const cv::Point corners[] = { { right, bottom }, { left, bottom }, { right, top }, { left, top } };
+  cv::Rect best;
+  int best_ink = -1;
+  for (const cv::Point& corner : corners)
+  {
+    const cv::Rect box = cv::Rect(corner, size) & cv::Rect(0, 0, ink.cols, ink.rows);
+    const int covered = cv::countNonZero(ink(box));
+    if (best_ink < 0 || covered < best_ink)
+    {
+      best = box;
+      best_ink = covered;
+    }
+  }
+  return best;
+}
+
+void drawLegend(cv::Mat& image, const cv::Mat& ink, const cv::Rect& area, const std::vector<PrPlotSeries>& series,
+                double scale)
 {
   const int line_height = static_cast<int>(22 * scale);
   int width = 0;
@@ -679,8 +703,8 @@ void drawLegend(cv::Mat& image, const cv::Rect& area, const std::vector<PrPlotSe
     int baseline = 0;
     width = std::max(width, cv::getTextSize(labels.back(), kFont, 0.45 * scale, 1, &baseline).width);
   }
-  const cv::Rect box(area.x + 10, area.y + area.height - 10 - line_height * static_cast<int>(series.size()) - 8,
-                     width + 50, line_height * static_cast<int>(series.size()) + 8);
+  const cv::Rect box =
+      quietestCorner(ink, area, cv::Size(width + 50, line_height * static_cast<int>(series.size()) + 8));
   cv::rectangle(image, box, cv::Scalar::all(255), cv::FILLED);
   cv::rectangle(image, box, kBlack, 1);
   for (size_t i = 0; i < series.size(); ++i)
@@ -710,11 +734,13 @@ cv::Mat drawPrCurves(const std::vector<PrPlotSeries>& series, const std::string&
   const int top = static_cast<int>(55 * scale), right = static_cast<int>(30 * scale);
   const cv::Rect area(left, top, size.width - left - right, size.height - top - bottom);
   drawAxes(image, area, scale);
+  cv::Mat ink(size, CV_8U, cv::Scalar(0));
   for (size_t i = 0; i < series.size(); ++i)
   {
     drawCurve(image, area, series[i].result.curve, seriesColour(i));
+    drawCurve(ink, area, series[i].result.curve, cv::Scalar(255));
   }
-  drawLegend(image, area, series, scale);
+  drawLegend(image, ink, area, series, scale);
   std::string heading = title;
   if (series.size() == 1)
   {
