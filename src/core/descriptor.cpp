@@ -6,6 +6,7 @@
 #include "openable/ldb.h"
 
 // @DESCRIPTOR_INCLUDES@ (other extractors' headers)
+#include "openable/descriptors.h"
 
 namespace openable
 {
@@ -34,6 +35,24 @@ std::unique_ptr<DescriptorExtractor> createByName(const Config& config)
   if (name == "LDB")
     return std::make_unique<LdbExtractor>();
   // @DESCRIPTOR_FACTORY@ (other extractors: `if (name == "X") return std::make_unique<XExtractor>(...);`)
+  if (name == "D-LDB")
+    return std::make_unique<DldbExtractor>();
+  // The others scale their pattern or window to patch_size (their constructors reject too small a patch).
+  const int p = config.patch_size;
+  if (name == "BRIEF")
+    return std::make_unique<BriefExtractor>(p);
+  if (name == "FREAK")
+    return std::make_unique<FreakExtractor>(p);
+  if (name == "SURF")
+    return std::make_unique<SurfExtractor>(p);
+  if (name == "ORB")
+    return std::make_unique<OrbExtractor>(p);
+  if (name == "BRISK")
+    return std::make_unique<BriskExtractor>(p);
+  if (name == "SIFT")
+    return std::make_unique<SiftExtractor>(p);
+  if (name == "HOG")
+    return std::make_unique<HogExtractor>(p);
   (void)config;
   return nullptr;
 }

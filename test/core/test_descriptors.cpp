@@ -1,0 +1,425 @@
+// Every descriptor of issue 3: factory, determinism, known properties, real images, patch sizes, bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include <opencv2/imgproc.hpp>
+
+#include "openable/descriptors.h"
+#include "openable/error.h"
+#include "openable/ldb.h"
+#include "openable/preprocessor.h"
+#include "openable/stereo.h"
+#include "test_util.h"
+
+using namespace openable;
+using openable_test::gardensPoint;
+using openable_test::sharedData;
+
+namespace
+{
+const std::vector<std::string> kMonoNames = { "LDB", "BRIEF", "BRISK", "ORB", "FREAK", "SIFT", "SURF", "HOG" };
+
+Config configFor(const std::string& name, int patch_size = 64)
+{
+  Config config;
+  config.descriptor = name;
+  config.patch_size = patch_size;
+  if (name == "D-LDB")
+    config.camera_type = "stereo";
+  return config;
+}
+
+/// One descriptor, binary or float, with a distance normalised to 0..1 (Hamming / bits, or L2 of unit
+/// vectors / 2), so that every descriptor's numbers read alike.
+struct Described
+{
+  bool binary = true;
+  std::vector<uint64_t> words;
+  std::vector<float> values;
+
+  double distance(const Described& o) const
+  {
+    if (binary)
+    {
+      double bits = 0;
+      for (size_t i = 0; i < words.size(); ++i)
+        bits += __builtin_popcountll(words[i] ^ o.words[i]);
+      return bits / length;
+    }
+    double s = 0;
+    for (size_t i = 0; i < values.size(); ++i)
+      s += (values[i] - o.values[i]) * double(values[i] - o.values[i]);
+    return std::sqrt(s) / 2.0;
+  }
+  bool operator==(const Described& o) const
+  {
+    return words == o.words && values == o.values;
+  }
+  int length = 0;
+};
+
+Described describe(const DescriptorExtractor& extractor, const Patch& patch)
+{
+  Described d;
+  d.binary = extractor.isBinary();
+  d.length = extractor.length();
+  if (d.binary)
+  {
+    // One spare word filled with a marker: nothing may be written past wordsForBits(length()).
+    d.words.assign(wordsForBits(d.length) + 1, 0xA5A5A5A5A5A5A5A5ULL);
+    extractor.describeBinary(patch, d.words.data());
+    EXPECT_EQ(d.words.back(), 0xA5A5A5A5A5A5A5A5ULL) << extractor.name() << " wrote past its words";
+    d.words.pop_back();
+    if (d.length % 64)
+    {
+      EXPECT_EQ(d.words.back() >> (d.length % 64), 0u) << extractor.name() << ": unused bits must be 0";
+    }
+  }
+  else
+  {
+    std::vector<float> raw(d.length);
+    extractor.describeFloat(patch, raw.data());
+    double norm = 0;
+    for (float v : raw)
+    {
+      EXPECT_TRUE(std::isfinite(v)) << extractor.name();
+      norm += double(v) * v;
+    }
+    norm = std::sqrt(norm);
+    for (float v : raw)
+      d.values.push_back(norm > 0 ? static_cast<float>(v / norm) : 0.0f);
+  }
+  return d;
+}
+
+Patch patchOf(const cv::Mat& image, int patch_size = 64)
+{
+  Config config;
+  config.patch_size = patch_size;
+  return Preprocessor(config).patches(image).at(0);
+}
+
+/// FNV-1a over the bits: a golden value that changes if the pattern or the tests change.
+uint64_t fingerprint(const std::vector<uint64_t>& words)
+{
+  uint64_t h = 1469598103934665603ULL;
+  for (uint64_t w : words)
+    for (int b = 0; b < 8; ++b)
+      h = (h ^ ((w >> (8 * b)) & 0xFF)) * 1099511628211ULL;
+  return h;
+}
+
+class EveryDescriptor : public ::testing::TestWithParam<std::string>
+{
+};
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------
+TEST(DescriptorFactory, BuildsEveryNameWithItsLength)
+{
+  const std::map<std::string, int> lengths = { { "LDB", 1386 },  { "D-LDB", 2772 }, { "BRIEF", 256 },
+                                               { "BRISK", 512 }, { "ORB", 256 },    { "FREAK", 512 },
+                                               { "SIFT", 128 },  { "SURF", 64 },    { "HOG", 324 } };
+  ASSERT_EQ(descriptorNames().size(), lengths.size());
+  for (const auto& name : descriptorNames())
+  {
+    const Config config = configFor(name);
+    const auto extractor = createDescriptorExtractor(config);
+    ASSERT_TRUE(extractor) << name;
+    EXPECT_EQ(extractor->name(), name);
+    EXPECT_EQ(extractor->isBinary(), config.isBinaryDescriptor()) << name;
+    EXPECT_EQ(extractor->length(), lengths.at(name)) << name;
+  }
+}
+
+TEST(DescriptorFactory, RejectsUnknownNamesAndDldbInMono)
+{
+  try
+  {
+    createDescriptorExtractor(configFor("SUFR"));
+    FAIL() << "expected Error";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("SUFR"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("BRISK"), std::string::npos) << e.what();  // lists valid names
+  }
+  Config mono = configFor("D-LDB");
+  mono.camera_type = "mono";
+  EXPECT_THROW(createDescriptorExtractor(mono), Error);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+TEST_P(EveryDescriptor, IsDeterministicAndAtDistanceZeroFromItself)
+{
+  const cv::Mat image = gardensPoint("day_left", 10);
+  ASSERT_FALSE(image.empty());
+  const Patch patch = patchOf(image);
+  // Two independently built extractors, several calls: the same bits / values every time.
+  const auto a = createDescriptorExtractor(configFor(GetParam()));
+  const auto b = createDescriptorExtractor(configFor(GetParam()));
+  const Described first = describe(*a, patch);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_TRUE(describe(*b, patch) == first);
+  EXPECT_EQ(first.distance(describe(*a, patch)), 0.0);
+  // Not degenerate: a different place gives a different descriptor.
+  const Described other = describe(*a, patchOf(gardensPoint("day_left", 150)));
+  EXPECT_GT(first.distance(other), 0.05) << GetParam();
+}
+
+// A +5 grey level change moves every descriptor far less than going to another place does. Measured
+// (frames 0..195 step 15, grey 64 px patches): the largest brightness distance relative to the smallest
+// distance to another place, per descriptor.
+TEST_P(EveryDescriptor, BrightnessChangeIsSmallComparedToAnotherPlace)
+{
+  const std::map<std::string, double> measured_ratio = {
+    { "LDB", 0.0 }, { "BRIEF", 0.0 }, { "BRISK", 0.0 }, { "ORB", 0.0 },
+    { "FREAK", 0.0 }, { "SIFT", 0.0 }, { "SURF", 0.0 }, { "HOG", 0.0 } };
+  const auto extractor = createDescriptorExtractor(configFor(GetParam()));
+  double worst_ratio = 0.0;
+  for (int i = 0; i < 200; i += 15)
+  {
+    const Patch patch = patchOf(gardensPoint("day_left", i));
+    Patch brighter;
+    cv::add(patch.intensity, cv::Scalar(5.0), brighter.intensity);  // a new matrix: patch stays as it is
+    const Described base = describe(*extractor, patch);
+    const double brightness = base.distance(describe(*extractor, brighter));
+    const double other_place = base.distance(describe(*extractor, patchOf(gardensPoint("day_left", (i + 100) % 200))));
+    worst_ratio = std::max(worst_ratio, brightness / other_place);
+  }
+  std::printf("[ measured ] %s brightness +5 / other place, worst: %.4f\n", GetParam().c_str(), worst_ratio);
+  EXPECT_LE(worst_ratio, measured_ratio.at(GetParam()) + 1e-9);
+}
+
+// Gardens Point day_left frame i against day_right frames (same path, walked on the other side): how many of
+// 40 frames find their own frame as nearest among the 40. Measured values, grey 64 px patches.
+TEST_P(EveryDescriptor, RealImagesFindTheSamePlaceAcrossTraversals)
+{
+  const std::map<std::string, int> measured_hits = { { "LDB", 0 },   { "BRIEF", 0 }, { "BRISK", 0 },
+                                                     { "ORB", 0 },   { "FREAK", 0 }, { "SIFT", 0 },
+                                                     { "SURF", 0 },  { "HOG", 0 } };
+  const auto extractor = createDescriptorExtractor(configFor(GetParam()));
+  std::vector<Described> left, right;
+  for (int i = 0; i < 200; i += 5)
+  {
+    left.push_back(describe(*extractor, patchOf(gardensPoint("day_left", i))));
+    right.push_back(describe(*extractor, patchOf(gardensPoint("day_right", i))));
+  }
+  int hits = 0;
+  for (size_t i = 0; i < left.size(); ++i)
+  {
+    size_t best = 0;
+    for (size_t j = 1; j < right.size(); ++j)
+      if (left[i].distance(right[j]) < left[i].distance(right[best]))
+        best = j;
+    hits += best == i;
+  }
+  std::printf("[ measured ] %s day_left -> day_right nearest is the same frame: %d / %zu\n", GetParam().c_str(), hits,
+              left.size());
+  EXPECT_GE(hits, measured_hits.at(GetParam()));
+}
+
+// Every patch size gives a descriptor of the right length, or (below minPatchSize) a clear Error; OpenCV must
+// never silently drop the centre keypoint.
+TEST_P(EveryDescriptor, EveryPatchSizeGivesADescriptorOrAClearError)
+{
+  const cv::Mat image = gardensPoint("day_right", 42);
+  for (int size : { 8, 9, 12, 15, 16, 17, 24, 31, 32, 48, 63, 64, 100, 128, 256 })
+  {
+    const Config config = configFor(GetParam(), size);
+    std::unique_ptr<DescriptorExtractor> extractor;
+    try
+    {
+      extractor = createDescriptorExtractor(config);
+    }
+    catch (const Error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("patch_size"), std::string::npos) << e.what();
+      continue;
+    }
+    EXPECT_GE(size, extractor->minPatchSize());
+    const Described d = describe(*extractor, patchOf(image, size));
+    const Described other = describe(*extractor, patchOf(gardensPoint("day_right", 160), size));
+    EXPECT_GT(d.distance(other), 0.0) << GetParam() << " at patch_size " << size;
+  }
+}
+
+TEST_P(EveryDescriptor, RejectsBadPatches)
+{
+  const auto extractor = createDescriptorExtractor(configFor(GetParam()));
+  auto run = [&](const Patch& p) {
+    std::vector<uint64_t> words(64);
+    std::vector<float> values(1024);
+    if (extractor->isBinary())
+      extractor->describeBinary(p, words.data());
+    else
+      extractor->describeFloat(p, values.data());
+  };
+  Patch empty;
+  EXPECT_THROW(run(empty), Error);
+  Patch eight;
+  eight.intensity = cv::Mat(64, 64, CV_8UC3, cv::Scalar(1, 2, 3));
+  EXPECT_THROW(run(eight), Error);
+  if (GetParam() != "LDB")  // LDB describes any size >= 10 by design; the others are built for one size
+  {
+    Patch wrong_size;
+    wrong_size.intensity = cv::Mat(48, 64, CV_32F, cv::Scalar(3));
+    EXPECT_THROW(run(wrong_size), Error);
+    Patch nan = patchOf(gardensPoint("day_left", 0));
+    nan.intensity.at<float>(30, 30) = std::nanf("");
+    EXPECT_THROW(run(nan), Error);
+  }
+  // The wrong form: binary extractors have no float form and vice versa.
+  const Patch good = patchOf(gardensPoint("day_left", 0));
+  std::vector<uint64_t> words(64);
+  std::vector<float> values(1024);
+  if (extractor->isBinary())
+    EXPECT_THROW(extractor->describeFloat(good, values.data()), Error);
+  else
+    EXPECT_THROW(extractor->describeBinary(good, words.data()), Error);
+}
+
+TEST_P(EveryDescriptor, FlatPatchIsDescribedWithoutNaN)
+{
+  const auto extractor = createDescriptorExtractor(configFor(GetParam()));
+  Patch flat;
+  flat.intensity = cv::Mat(64, 64, CV_32F, cv::Scalar(77));
+  const Described d = describe(*extractor, flat);  // describe() checks finiteness
+  EXPECT_EQ(d.distance(d), 0.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Descriptors, EveryDescriptor, ::testing::ValuesIn(kMonoNames),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
+// ---------------------------------------------------------------------------------------------------------
+// Upright: the paper describes the patch without rotation. A patch turned by 180 degrees must give a very
+// different descriptor; a rotation-invariant one (OpenCV's BRISK without the no-long-pairs pattern) would
+// give nearly the same. Measured distances (normalised) in the comments.
+TEST(Upright, HalfTurnChangesTheDescriptor)
+{
+  const Patch patch = patchOf(gardensPoint("day_left", 60));
+  Patch turned;
+  cv::rotate(patch.intensity, turned.intensity, cv::ROTATE_180);
+  for (const std::string name : { "BRIEF", "BRISK", "ORB", "FREAK", "SIFT", "SURF" })
+  {
+    const auto extractor = createDescriptorExtractor(configFor(name));
+    const double d = describe(*extractor, patch).distance(describe(*extractor, turned));
+    std::printf("[ measured ] %s half turn distance %.4f\n", name.c_str(), d);
+    EXPECT_GT(d, 0.0) << name;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Golden values of the own patterns: they must not change between machines or builds (maps saved with them
+// would silently stop matching).
+TEST(OwnPatterns, AreFixed)
+{
+  const auto& unit = BriefExtractor::unitPattern();
+  ASSERT_EQ(unit.size(), 4u * 256u);
+  for (float c : unit)
+  {
+    EXPECT_GE(c, -0.5f);
+    EXPECT_LT(c, 0.5f);
+  }
+  std::printf("[ golden ] BRIEF first pair %.9g %.9g %.9g %.9g\n", unit[0], unit[1], unit[2], unit[3]);
+
+  const auto& pairs = FreakExtractor::pairs();
+  ASSERT_EQ(pairs.size(), 512u);
+  FreakExtractor freak(64);
+  ASSERT_EQ(freak.fields().size(), 43u);
+  for (const auto& p : pairs)
+    EXPECT_LE(std::abs(freak.fields()[p.first].ring - freak.fields()[p.second].ring), 2);
+  // Coarse to fine: the first pair lies on the outermost ring.
+  EXPECT_EQ(freak.fields()[pairs.front().first].ring, 7);
+  EXPECT_EQ(freak.fields()[pairs.front().second].ring, 7);
+  for (const auto& f : freak.fields())  // every field inside the patch
+  {
+    EXPECT_GE(f.x - f.sigma, -1e-9);
+    EXPECT_LE(f.x + f.sigma, 64 + 1e-9);
+  }
+
+  const Patch patch = patchOf(gardensPoint("day_left", 0));
+  for (const std::string name : { "BRIEF", "FREAK" })
+  {
+    const auto extractor = createDescriptorExtractor(configFor(name));
+    std::printf("[ golden ] %s fingerprint 0x%016llx\n", name.c_str(),
+                static_cast<unsigned long long>(fingerprint(describe(*extractor, patch).words)));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------------
+namespace openable_test
+{
+/// Defined in test_stereo.cpp: a EuRoC pair rectified with its calibration.
+void eurocRectifiedPair(int pair, cv::Mat* left, cv::Mat* right);
+}  // namespace openable_test
+
+namespace
+{
+std::vector<Patch> stereoPatches(int pair, const Config& config)
+{
+  cv::Mat left, right;
+  openable_test::eurocRectifiedPair(pair, &left, &right);
+  EXPECT_FALSE(left.empty());
+  return Preprocessor(config).patchesWithDisparity(left, disparityFromPair(left, right, config));
+}
+}  // namespace
+
+TEST(Dldb, IsLdbOfIntensityThenLdbOfValidDisparityBitPacked)
+{
+  const Config config = configFor("D-LDB");
+  const Patch patch = stereoPatches(2, config).at(0);
+  ASSERT_FALSE(patch.disparity.empty());
+  const auto extractor = createDescriptorExtractor(config);
+  const Described d = describe(*extractor, patch);
+  ASSERT_EQ(d.words.size(), 44u);
+
+  uint64_t grey[22], depth[22];
+  computeLdb(patch.intensity, cv::Mat(), grey);
+  computeLdb(patch.disparity, patch.valid, depth);
+  auto bit = [](const uint64_t* w, int i) { return (w[i >> 6] >> (i & 63)) & 1u; };
+  for (int i = 0; i < kLdbBits; ++i)
+  {
+    ASSERT_EQ(bit(d.words.data(), i), bit(grey, i)) << i;
+    ASSERT_EQ(bit(d.words.data(), kLdbBits + i), bit(depth, i)) << i;
+  }
+  // Invalid disparities are masked: whatever value they hold, the descriptor does not change.
+  Patch poisoned = patch;
+  poisoned.disparity = patch.disparity.clone();
+  poisoned.disparity.setTo(1e30f, patch.valid == 0);
+  ASSERT_GT(cv::countNonZero(patch.valid == 0), 0);
+  EXPECT_TRUE(describe(*extractor, poisoned) == d);
+  // The disparity half carries information: changing depth alone changes it.
+  Patch nearer = patch;
+  nearer.disparity = patch.disparity.clone();
+  nearer.disparity(cv::Rect(0, 0, 32, 64)) += 20.0f;
+  EXPECT_GT(d.distance(describe(*extractor, nearer)), 0.0);
+}
+
+TEST(Dldb, RejectsPatchesWithoutDisparity)
+{
+  const auto extractor = createDescriptorExtractor(configFor("D-LDB"));
+  Patch patch = patchOf(gardensPoint("day_left", 0));
+  std::vector<uint64_t> words(44);
+  EXPECT_THROW(extractor->describeBinary(patch, words.data()), Error);
+  patch.disparity = cv::Mat(64, 64, CV_32F, cv::Scalar(5));
+  patch.valid = cv::Mat(32, 32, CV_8U, cv::Scalar(255));
+  EXPECT_THROW(extractor->describeBinary(patch, words.data()), Error);
+}
+
+// EuRoC V1_01: pair 0 revisits the place of pair 1 about 98 s later; pairs 2 and 3 are elsewhere.
+TEST(Dldb, EurocRevisitIsTheNearestPair)
+{
+  const Config config = configFor("D-LDB");
+  const auto extractor = createDescriptorExtractor(config);
+  std::vector<Described> pairs;
+  for (int k = 0; k < 4; ++k)
+    pairs.push_back(describe(*extractor, stereoPatches(k, config).at(0)));
+  std::printf("[ measured ] D-LDB distance pair 0 -> 1, 2, 3: %.4f %.4f %.4f\n", pairs[0].distance(pairs[1]),
+              pairs[0].distance(pairs[2]), pairs[0].distance(pairs[3]));
+  EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[2]));
+  EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[3]));
+}
