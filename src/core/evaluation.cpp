@@ -747,7 +747,15 @@ cv::Mat drawPrCurves(const std::vector<PrPlotSeries>& series, const std::string&
     heading += (heading.empty() ? "" : " - ") + std::string("AUC ") +
                numberText(std::round(series.front().result.auc * 1000.0) / 1000.0);
   }
-  putCentred(image, heading, cv::Point(size.width / 2, top / 2), 0.7 * scale, std::max(1, int(std::lround(scale))));
+  // A long title is set smaller rather than cut off at the image edges.
+  const int thickness = std::max(1, static_cast<int>(std::lround(scale)));
+  double title_scale = 0.7 * scale;
+  int baseline = 0;
+  while (title_scale > 0.3 && cv::getTextSize(heading, kFont, title_scale, thickness, &baseline).width > size.width - 20)
+  {
+    title_scale *= 0.95;
+  }
+  putCentred(image, heading, cv::Point(size.width / 2, top / 2), title_scale, thickness);
   return image;
 }
 
