@@ -383,3 +383,9 @@ TEST(FeatureStore, EvictsOldestFirstUnderTheBound)
 }
 
 }  // namespace
+
+int main(int argc, char** argv)
+{
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}

@@ -292,3 +292,9 @@ TEST(PoseGraph, SmallGraphExactAndBadInput)
 }
 
 }  // namespace
+
+int main(int argc, char** argv)
+{
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
