@@ -3,10 +3,11 @@
 // literal padded so the data starts on a 64-byte boundary).
 #include "openable/npy.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 
 #include "openable/error.h"
@@ -29,14 +30,31 @@ bool isLittleEndianHost()
   return first == 1;
 }
 
-std::string readWholeFile(const std::string& path)
+// Headers are a few hundred bytes; a bigger one is corrupt or not worth supporting.
+const size_t kMaxHeadBytes = 1 << 20;
+
+/// Opens `path` and returns its size and its first bytes (up to kMaxHeadBytes): the header is parsed from
+/// these, and the data is then read straight into the matrix (no second copy of a large file).
+std::ifstream openWithHead(const std::string& path, uint64_t& file_size, std::string& head)
 {
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in)
   {
     throw Error("npy: cannot open '" + path + "' for reading (missing or unreadable)");
   }
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  const std::streamoff end = in.tellg();
+  if (end < 0 || std::filesystem::is_directory(path))
+  {
+    throw Error("npy: '" + path + "' is not a readable file");
+  }
+  file_size = static_cast<uint64_t>(end);
+  head.resize(static_cast<size_t>(std::min<uint64_t>(file_size, kMaxHeadBytes)));
+  in.seekg(0);
+  if (!in.read(&head[0], static_cast<std::streamsize>(head.size())))
+  {
+    throw Error("npy: cannot read '" + path + "'");
+  }
+  return in;
 }
 
 uint32_t readLittleEndian(const std::string& bytes, size_t offset, size_t width)
@@ -145,6 +163,11 @@ NpyHeader parseHeader(const std::string& bytes, const std::string& path)
   const size_t header_size = readLittleEndian(bytes, 8, width);
   NpyHeader header;
   header.data_offset = 8 + width + header_size;
+  if (bytes.size() < header.data_offset && bytes.size() == kMaxHeadBytes)
+  {
+    throw Error("npy: '" + path + "' declares a header of " + std::to_string(header_size) +
+                " bytes; more than 1 MiB is not supported");
+  }
   if (bytes.size() < header.data_offset)
   {
     throw Error("npy: '" + path + "' is truncated inside its header (" + std::to_string(bytes.size()) +
@@ -230,34 +253,39 @@ cv::Mat readNpy(const std::string& path)
   {
     throw Error("npy: reading little-endian data on a big-endian host is not supported");
   }
-  const std::string bytes = readWholeFile(path);
-  const NpyHeader header = parseHeader(bytes, path);
+  uint64_t file_size = 0;
+  std::string head;
+  std::ifstream in = openWithHead(path, file_size, head);
+  const NpyHeader header = parseHeader(head, path);
   checkSupported(header, path);
   const int rows = static_cast<int>(header.shape[0]);
   const int cols = static_cast<int>(header.shape[1]);
   const size_t item = header.descr == "'<f4'" ? 4 : 8;
   // Checked against the file size before allocating, so a corrupt shape cannot ask for terabytes.
   // Dims are < 2^31 each, so the product of three factors (<= 2^65) is formed in two checked steps.
-  const uint64_t available = bytes.size() - header.data_offset;
+  const uint64_t available = file_size - header.data_offset;
   const uint64_t cells = header.shape[0] * header.shape[1];
   const bool overflows = cells > UINT64_MAX / item;
   const uint64_t expected = overflows ? UINT64_MAX : cells * item;
   if (available != expected)
   {
     throw Error("npy: '" + path + "' holds " + std::to_string(available) + " data bytes but its shape (" +
-                std::to_string(rows) + ", " + std::to_string(cols) + ") needs " + std::to_string(expected) +
+                std::to_string(rows) + ", " + std::to_string(cols) + ") needs " +
+                (overflows ? std::string("more than 2^64") : std::to_string(expected)) +
                 (available < expected ? " (truncated)" : " (trailing garbage)"));
   }
-  cv::Mat matrix(rows, cols, CV_32F);
-  const char* data = bytes.data() + header.data_offset;
+  cv::Mat raw(rows, cols, item == 4 ? CV_32F : CV_64F);
+  in.seekg(static_cast<std::streamoff>(header.data_offset));
+  if (expected > 0 && !in.read(reinterpret_cast<char*>(raw.data), static_cast<std::streamsize>(expected)))
+  {
+    throw Error("npy: cannot read the data of '" + path + "'");
+  }
   if (item == 4)
   {
-    std::memcpy(matrix.data, data, expected);
-    return matrix;
+    return raw;
   }
-  cv::Mat wide(rows, cols, CV_64F);
-  std::memcpy(wide.data, data, expected);
-  wide.convertTo(matrix, CV_32F);
+  cv::Mat matrix;
+  raw.convertTo(matrix, CV_32F);
   return matrix;
 }
 

@@ -197,6 +197,10 @@ TEST_F(NpyTest, RejectsEveryUnsupportedOrCorruptFileWithAReason)
   const std::string good = "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2), }";
   const std::string data = rawBytes<float>({ 1.0F, 2.0F, 3.0F, 4.0F });
   expectReadError(path("missing.npy"), "cannot open");
+  expectReadError(dir_.string(), "not a readable file");
+
+  writeBytes(path("zero.npy"), "");
+  expectReadError(path("zero.npy"), "not a .npy file");
 
   writeBytes(path("text.npy"), "threshold,precision,recall\n");
   expectReadError(path("text.npy"), "not a .npy file");
