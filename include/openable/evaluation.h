@@ -73,11 +73,12 @@ private:
 /// num_queries != num_references (aligned traversals have as many frames on both sides).
 GroundTruth alignedGroundTruth(int num_queries, int num_references, int tolerance);
 
-/// A file of `i j` lines (0-based; frame i closes a loop with frame j; `#` starts a comment line), as in
-/// the published KITTI loop ground truth. Query i also matches references within `pair_tolerance` frames
-/// of j. A comment holding `shape=RxC` (as the published files do) fixes the matrix shape exactly;
-/// otherwise the matrix needs at least max(i)+1 rows and max(j)+1 columns. Throws Error for a missing
-/// file, a malformed line (with its number), a negative index, or an index outside a declared shape.
+/// A file of `i j` lines (0-based; frame i closes a loop with frame j; `#` starts a comment, on its own
+/// line or after the two indices), as in the published KITTI loop ground truth. Query i also matches
+/// references within `pair_tolerance` frames of j. A comment holding `shape=RxC` (as the published files
+/// do) fixes the matrix shape exactly; otherwise the matrix needs at least max(i)+1 rows and max(j)+1
+/// columns. Throws Error for a missing file, a malformed line (with its number), a negative index, or an
+/// index outside a declared shape.
 GroundTruth loadPairsGroundTruth(const std::string& path, int pair_tolerance = 0);
 
 /// Camera positions (translation column) of a KITTI odometry poses file: one row-major 3x4 [R|t] per

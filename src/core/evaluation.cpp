@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -298,7 +300,10 @@ GroundTruth loadPairsGroundTruth(const std::string& path, int pair_tolerance)
     std::istringstream fields(line);
     long i = 0, j = 0;
     std::string rest;
-    if (!(fields >> i >> j) || (fields >> rest) || i < 0 || j < 0 || i > INT32_MAX || j > INT32_MAX)
+    const bool parsed = static_cast<bool>(fields >> i >> j);
+    // Anything after the two indices must be a comment.
+    const bool trailing = parsed && (fields >> rest) && rest[0] != '#';
+    if (!parsed || trailing || i < 0 || j < 0 || i > INT32_MAX || j > INT32_MAX)
     {
       throw Error("pairs ground truth: '" + path + "' line " + std::to_string(number) +
                   " is not two non-negative frame indices 'i j': '" + line + "'");
@@ -489,6 +494,10 @@ std::vector<bool> brightFrameMask(const std::vector<cv::Mat>& images, double min
     if (images[i].empty())
     {
       throw Error("dark-frame mask: image " + std::to_string(i) + " is empty");
+    }
+    if (images[i].depth() != CV_8U && images[i].depth() != CV_16U)
+    {
+      throw Error("dark-frame mask: image " + std::to_string(i) + " is not 8-bit or 16-bit");
     }
     cv::Mat eight_bit = images[i];
     if (images[i].depth() == CV_16U)

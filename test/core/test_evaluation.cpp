@@ -385,7 +385,8 @@ TEST(GroundTruth, AlignedMatchesWithinTolerance)
 TEST(GroundTruth, PairsFileWithCommentsToleranceAndNoDeclaredShape)
 {
   TempDir dir;
-  const std::string file = dir.file("pairs.txt", "# loops of a tiny sequence\n\n9 2\n9 0\n  # indented comment\n7 3\n9 2\n");
+  const std::string file =
+      dir.file("pairs.txt", "# loops of a tiny sequence\n\n9 2\n9 0  # trailing comment\n  # indented comment\n7 3\n9 2\n");
   const GroundTruth t = openable::loadPairsGroundTruth(file, 1);
   EXPECT_EQ(t.numPairs(), 3u);  // the repeated pair counts once
   EXPECT_EQ(t.anchors(9), (std::vector<int>{ 0, 2 }));
@@ -557,6 +558,8 @@ TEST(QueryMask, DarkFramesByMeanIntensity)
   EXPECT_EQ(openable::brightFrameMask({ half }), std::vector<bool>{ true });
   EXPECT_EQ(openable::brightFrameMask({ half }, 10.5), std::vector<bool>{ false });
   expectError([] { openable::brightFrameMask(std::vector<cv::Mat>{ cv::Mat() }); }, "image 0 is empty");
+  expectError([] { openable::brightFrameMask({ cv::Mat(2, 2, CV_8U), cv::Mat(2, 2, CV_32F, cv::Scalar(0.5)) }); },
+              "image 1 is not 8-bit or 16-bit");
 }
 
 TEST(QueryMask, NordlandWinterFolderAgreesWithAPixelSum)
