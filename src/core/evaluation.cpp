@@ -9,9 +9,8 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
-#include <sstream>
-
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "openable/error.h"
 #include "openable/image_source.h"
@@ -129,8 +128,8 @@ std::vector<QueryPrediction> predictQueries(const cv::Mat& distances, const Grou
     }
     QueryPrediction p;
     p.query = q;
-    p.match = distances.type() == CV_32F ? bestColumn(distances.ptr<float>(q), distances.cols, p.distance) :
-                                           bestColumn(distances.ptr<double>(q), distances.cols, p.distance);
+    p.match = distances.type() == CV_32F ? bestColumn(distances.ptr<float>(q), distances.cols, p.distance)
+                                         : bestColumn(distances.ptr<double>(q), distances.cols, p.distance);
     p.positive = ground_truth.hasMatch(q);
     p.correct = p.match >= 0 && ground_truth.isMatch(q, p.match);
     predictions.push_back(p);
@@ -165,7 +164,7 @@ void sweepThresholds(EvaluationResult& result)
     }
     const double precision = static_cast<double>(true_positives) / static_cast<double>(accepted);
     const double recall = static_cast<double>(true_positives) / positives;
-    result.curve.push_back({ threshold, precision, recall });
+    result.curve.push_back({threshold, precision, recall});
     result.auc += (recall - previous_recall) * precision;
     previous_recall = recall;
     if (true_positives == accepted)
@@ -182,12 +181,12 @@ void sweepThresholds(EvaluationResult& result)
 
 GroundTruth::GroundTruth(std::vector<std::vector<int>> anchors, int tolerance, int num_queries, int num_references,
                          bool exact_shape, std::string description)
-  : anchors_(std::move(anchors))
-  , tolerance_(tolerance)
-  , num_queries_(num_queries)
-  , num_references_(num_references)
-  , exact_shape_(exact_shape)
-  , description_(std::move(description))
+  : anchors_(std::move(anchors)),
+    tolerance_(tolerance),
+    num_queries_(num_queries),
+    num_references_(num_references),
+    exact_shape_(exact_shape),
+    description_(std::move(description))
 {
   if (tolerance_ < 0)
   {
@@ -389,9 +388,9 @@ GroundTruth posesGroundTruth(const std::vector<cv::Vec3d>& positions, double dis
       }
     }
   }
-  return GroundTruth(std::move(anchors), 0, n, n, true,
-                     "poses, distance < " + numberText(distance) + " m, more than " + std::to_string(exclusion) +
-                         " frames apart");
+  return GroundTruth(
+      std::move(anchors), 0, n, n, true,
+      "poses, distance < " + numberText(distance) + " m, more than " + std::to_string(exclusion) + " frames apart");
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -527,7 +526,7 @@ std::vector<bool> brightFrameMask(const std::string& image_source, double min_me
     {
       throw Error("dark-frame mask: cannot read frame '" + name + "' of '" + image_source + "'");
     }
-    mask.push_back(brightFrameMask(std::vector<cv::Mat>{ image }, min_mean).front());
+    mask.push_back(brightFrameMask(std::vector<cv::Mat>{image}, min_mean).front());
   }
   return mask;
 }
@@ -605,8 +604,8 @@ const int kFont = cv::FONT_HERSHEY_SIMPLEX;
 /// Distinguishable colours (BGR) for overlaid curves; repeats after the last.
 cv::Scalar seriesColour(size_t index)
 {
-  static const cv::Scalar kColours[] = { { 180, 119, 31 }, { 14, 127, 255 }, { 44, 160, 44 }, { 40, 39, 214 },
-                                         { 189, 103, 148 }, { 75, 86, 140 }, { 194, 119, 227 }, { 34, 189, 188 } };
+  static const cv::Scalar kColours[] = {{180, 119, 31},  {14, 127, 255}, {44, 160, 44},   {40, 39, 214},
+                                        {189, 103, 148}, {75, 86, 140},  {194, 119, 227}, {34, 189, 188}};
   return kColours[index % (sizeof(kColours) / sizeof(kColours[0]))];
 }
 
@@ -684,7 +683,7 @@ cv::Rect quietestCorner(const cv::Mat& ink, const cv::Rect& area, cv::Size size)
   const int margin = 10;
   const int left = area.x + margin, right = area.x + area.width - margin - size.width;
   const int top = area.y + margin, bottom = area.y + area.height - margin - size.height;
-  const cv::Point corners[] = { { right, bottom }, { left, bottom }, { right, top }, { left, top } };
+  const cv::Point corners[] = {{right, bottom}, {left, bottom}, {right, top}, {left, top}};
   cv::Rect best;
   int best_ink = -1;
   for (const cv::Point& corner : corners)
@@ -760,7 +759,8 @@ cv::Mat drawPrCurves(const std::vector<PrPlotSeries>& series, const std::string&
   const int thickness = std::max(1, static_cast<int>(std::lround(scale)));
   double title_scale = 0.7 * scale;
   int baseline = 0;
-  while (title_scale > 0.3 && cv::getTextSize(heading, kFont, title_scale, thickness, &baseline).width > size.width - 20)
+  while (title_scale > 0.3 &&
+         cv::getTextSize(heading, kFont, title_scale, thickness, &baseline).width > size.width - 20)
   {
     title_scale *= 0.95;
   }

@@ -4,12 +4,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "openable/error.h"
 #include "openable/evaluation.h"
@@ -292,7 +291,7 @@ int evaluate(const Options& o)
     if (several)
       std::cout << "name: " << name << "\n";
     printMetrics(result);
-    series.push_back({ name, std::move(result) });
+    series.push_back({name, std::move(result)});
   }
   if (several)
     json = "[" + json + "]";
@@ -308,8 +307,8 @@ void printAgreement(double distance, int exclusion, const openable::GroundTruthA
 {
   std::cout << distance << "," << exclusion << "," << a.candidate_pairs << "," << a.reference_pairs << ","
             << a.common_pairs << "," << a.pairPrecision() << "," << a.pairRecall() << "," << a.pairJaccard() << ","
-            << a.candidate_queries << "," << a.reference_queries << "," << a.common_queries << ","
-            << a.queryJaccard() << "\n";
+            << a.candidate_queries << "," << a.reference_queries << "," << a.common_queries << "," << a.queryJaccard()
+            << "\n";
 }
 
 /// Loops from poses against a published pairs file, at the given D and E or over a grid of them.
@@ -322,16 +321,16 @@ int compareGroundTruth(const Options& o)
                "pair_iou,pose_queries,published_queries,common_queries,query_iou\n";
   if (!o.sweep)
   {
-    printAgreement(o.distance, o.exclusion,
-                   openable::compareGroundTruth(openable::posesGroundTruth(positions, o.distance, o.exclusion),
-                                                reference));
+    printAgreement(
+        o.distance, o.exclusion,
+        openable::compareGroundTruth(openable::posesGroundTruth(positions, o.distance, o.exclusion), reference));
     return 0;
   }
   double best_iou = -1.0, best_distance = 0.0;
   int best_exclusion = 0;
   for (double distance = 1.0; distance <= 20.0; distance += 0.5)
   {
-    for (int exclusion : { 0, 10, 25, 50, 75, 100, 150, 200, 300, 500 })
+    for (int exclusion : {0, 10, 25, 50, 75, 100, 150, 200, 300, 500})
     {
       const openable::GroundTruthAgreement a =
           openable::compareGroundTruth(openable::posesGroundTruth(positions, distance, exclusion), reference);

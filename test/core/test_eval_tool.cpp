@@ -1,17 +1,16 @@
 // openable_eval end to end: runs the built binary on small .npy files written here and checks what it
 // writes and prints, and that bad input gives a non-zero exit with a one-line reason.
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "openable/evaluation.h"
 #include "openable/npy.h"
@@ -58,8 +57,8 @@ protected:
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     // The hand-computed four-by-four of test_evaluation.cpp: AUC 5/12, max recall at 100 % 0.25, R@1 0.5.
-    matrix_ = (cv::Mat_<float>(4, 4) << 0.1F, 0.5F, 0.9F, 0.9F, 0.2F, 0.8F, 0.9F, 0.9F, 0.9F, 0.9F, 0.3F, 0.9F,
-               0.9F, 0.4F, 0.9F, 0.9F);
+    matrix_ = (cv::Mat_<float>(4, 4) << 0.1F, 0.5F, 0.9F, 0.9F, 0.2F, 0.8F, 0.9F, 0.9F, 0.9F, 0.9F, 0.3F, 0.9F, 0.9F,
+               0.4F, 0.9F, 0.9F);
     openable::writeNpy(path("m.npy"), matrix_);
   }
   void TearDown() override
@@ -97,10 +96,11 @@ TEST_F(EvalToolTest, WritesCurvePlotAndMetricsAndPrintsThem)
   EXPECT_EQ(printed[0], "auc: 0.416667");
   EXPECT_EQ(printed[1], "max_recall_at_100_precision: 0.25");
   EXPECT_EQ(printed[2], "recall_at_1: 0.5");
-  EXPECT_EQ(printed[3], "{\"name\": \"m\", \"auc\": 0.416667, \"max_recall_at_100_precision\": 0.25, \"recall_at_1\": 0.5, "
-                       "\"evaluated_queries\": 4, \"positive_queries\": 4, \"masked_queries\": 0, "
-                       "\"queries_without_prediction\": 0, \"auc_rule\": \"step-wise average precision\", "
-                       "\"ground_truth\": \"aligned traversals, |i - j| <= 0\"}");
+  EXPECT_EQ(printed[3],
+            "{\"name\": \"m\", \"auc\": 0.416667, \"max_recall_at_100_precision\": 0.25, \"recall_at_1\": 0.5, "
+            "\"evaluated_queries\": 4, \"positive_queries\": 4, \"masked_queries\": 0, "
+            "\"queries_without_prediction\": 0, \"auc_rule\": \"step-wise average precision\", "
+            "\"ground_truth\": \"aligned traversals, |i - j| <= 0\"}");
   EXPECT_EQ(readText(path("out/metrics.json")), printed[3] + "\n");
   EXPECT_EQ(readText(path("out/pr_curve.csv")),
             "threshold,precision,recall\n0.100000001,1,0.25\n0.200000003,0.5,0.25\n0.300000012,0.666666667,0.5\n"
@@ -115,10 +115,10 @@ TEST_F(EvalToolTest, AcceptsAFolderAMaskAndPairs)
   fs::create_directories(path("run"));
   openable::writeNpy(path("run/distance_matrix.npy"), matrix_);
   // Leave out the two wrong queries (1 and 3): every prediction is right.
-  openable::saveQueryMask(path("mask.txt"), { true, false, true, false });
+  openable::saveQueryMask(path("mask.txt"), {true, false, true, false});
   std::ofstream(path("pairs.txt")) << "# shape=4x4\n0 0\n1 1\n2 2\n3 3\n";
-  const ToolRun r = run("--matrix '" + path("run") + "' --mask '" + path("mask.txt") + "' --pairs '" + path("pairs.txt") +
-                    "' --output '" + path("out") + "'");
+  const ToolRun r = run("--matrix '" + path("run") + "' --mask '" + path("mask.txt") + "' --pairs '" +
+                        path("pairs.txt") + "' --output '" + path("out") + "'");
   ASSERT_EQ(r.status, 0) << r.err;
   const std::vector<std::string> printed = lines(r.out);
   ASSERT_EQ(printed.size(), 4u);
@@ -145,7 +145,7 @@ TEST_F(EvalToolTest, MasksNearBlackQueryImages)
   ASSERT_EQ(printed.size(), 4u);
   EXPECT_EQ(printed[0], "auc: 1");
   EXPECT_EQ(printed[2], "recall_at_1: 1");
-  EXPECT_EQ(openable::loadQueryMask(path("out/query_mask.txt")), (std::vector<bool>{ true, false, true, false }));
+  EXPECT_EQ(openable::loadQueryMask(path("out/query_mask.txt")), (std::vector<bool>{true, false, true, false}));
 }
 
 TEST_F(EvalToolTest, OverlaysSeveralMatrices)
@@ -154,7 +154,7 @@ TEST_F(EvalToolTest, OverlaysSeveralMatrices)
   perfect.diag().setTo(0.0F);
   openable::writeNpy(path("p.npy"), perfect);
   const ToolRun r = run("--matrix '" + path("m.npy") + "' --name 'ldb global' --matrix '" + path("p.npy") +
-                    "' --name perfect --tolerance 0 --output '" + path("out") + "'");
+                        "' --name perfect --tolerance 0 --output '" + path("out") + "'");
   ASSERT_EQ(r.status, 0) << r.err;
   const std::vector<std::string> printed = lines(r.out);
   ASSERT_EQ(printed.size(), 9u) << r.out;
@@ -170,8 +170,8 @@ TEST_F(EvalToolTest, OverlaysSeveralMatrices)
 
 TEST_F(EvalToolTest, ComparesPosesWithThePublishedKittiGroundTruth)
 {
-  const ToolRun r = run("--poses '" + kKitti + "/poses/06.txt' --compare '" + kKitti +
-                    "/loop_ground_truth/kitti06GroundTruth.txt'");
+  const ToolRun r =
+      run("--poses '" + kKitti + "/poses/06.txt' --compare '" + kKitti + "/loop_ground_truth/kitti06GroundTruth.txt'");
   ASSERT_EQ(r.status, 0) << r.err;
   const std::vector<std::string> printed = lines(r.out);
   ASSERT_EQ(printed.size(), 2u);
@@ -217,9 +217,9 @@ TEST_F(EvalToolTest, HelpDocumentsEveryOption)
 {
   const ToolRun r = run("--help");
   EXPECT_EQ(r.status, 0);
-  for (const char* option : { "--matrix", "--name", "--mask", "--mask-dark", "--tolerance", "--pairs",
-                              "--pair-tolerance", "--poses", "--distance", "--exclusion", "--output", "--compare",
-                              "--sweep", "step-wise average precision" })
+  for (const char* option :
+       {"--matrix", "--name", "--mask", "--mask-dark", "--tolerance", "--pairs", "--pair-tolerance", "--poses",
+        "--distance", "--exclusion", "--output", "--compare", "--sweep", "step-wise average precision"})
   {
     EXPECT_NE(r.out.find(option), std::string::npos) << option;
   }

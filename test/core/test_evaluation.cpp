@@ -1,19 +1,19 @@
 // Ground truth and precision-recall: values computed by hand on small matrices, the published KITTI ground
 // truth, and agreement with a brute-force computation on real-sized and real data.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
 #include "openable/evaluation.h"
@@ -33,8 +33,8 @@ class TempDir
 public:
   TempDir()
   {
-    path_ = fs::temp_directory_path() /
-            ("openable_test_evaluation_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    path_ = fs::temp_directory_path() / ("openable_test_evaluation_" +
+                                         std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
@@ -77,8 +77,8 @@ void expectError(Call call, const std::string& needle)
 cv::Mat fourByFour()
 {
   return (cv::Mat_<float>(4, 4) << 0.1F, 0.5F, 0.9F, 0.9F,  //
-          0.2F, 0.8F, 0.9F, 0.9F,                          //
-          0.9F, 0.9F, 0.3F, 0.9F,                          //
+          0.2F, 0.8F, 0.9F, 0.9F,                           //
+          0.9F, 0.9F, 0.3F, 0.9F,                           //
           0.9F, 0.4F, 0.9F, 0.9F);
 }
 
@@ -88,15 +88,15 @@ cv::Mat fourByFour()
 cv::Mat fiveByThree()
 {
   return (cv::Mat_<float>(5, 3) << 1.0F, 5.0F, 5.0F,  //
-          kNan, kNan, kNan,                          //
-          5.0F, 1.0F, 5.0F,                          //
-          5.0F, 5.0F, 2.0F,                          //
+          kNan, kNan, kNan,                           //
+          5.0F, 1.0F, 5.0F,                           //
+          5.0F, 5.0F, 2.0F,                           //
           3.0F, 9.0F, 9.0F);
 }
 
 GroundTruth fiveByThreeTruth()
 {
-  return GroundTruth({ { 0 }, { 1 }, {}, { 2 }, { 0 } }, 0, 5, 3, true, "hand-made");
+  return GroundTruth({{0}, {1}, {}, {2}, {0}}, 0, 5, 3, true, "hand-made");
 }
 
 void expectCurve(const EvaluationResult& r, const std::vector<openable::PrPoint>& expected)
@@ -119,7 +119,7 @@ TEST(Evaluation, FourByFourStrictToleranceByHand)
 {
   const EvaluationResult r = openable::evaluatePrecisionRecall(fourByFour(), openable::alignedGroundTruth(4, 4, 0));
   // Thresholds 0.1 .. 0.4 accept 1 .. 4 predictions with 1, 1, 2, 2 true positives out of 4 positives.
-  expectCurve(r, { { 0.1, 1.0, 0.25 }, { 0.2, 0.5, 0.25 }, { 0.3, 2.0 / 3.0, 0.5 }, { 0.4, 0.5, 0.5 } });
+  expectCurve(r, {{0.1, 1.0, 0.25}, {0.2, 0.5, 0.25}, {0.3, 2.0 / 3.0, 0.5}, {0.4, 0.5, 0.5}});
   // AUC = 0.25 * 1 + 0 * 0.5 + 0.25 * 2/3 + 0 * 0.5 = 5/12.
   EXPECT_DOUBLE_EQ(r.auc, 5.0 / 12.0);
   EXPECT_DOUBLE_EQ(r.max_recall_at_100_precision, 0.25);
@@ -138,7 +138,7 @@ TEST(Evaluation, ToleranceOfOneFrameTurnsTheNeighbourIntoATrueMatch)
 {
   // q1 -> 0 is now within one frame; q3 -> 1 is still two frames off.
   const EvaluationResult r = openable::evaluatePrecisionRecall(fourByFour(), openable::alignedGroundTruth(4, 4, 1));
-  expectCurve(r, { { 0.1, 1.0, 0.25 }, { 0.2, 1.0, 0.5 }, { 0.3, 1.0, 0.75 }, { 0.4, 0.75, 0.75 } });
+  expectCurve(r, {{0.1, 1.0, 0.25}, {0.2, 1.0, 0.5}, {0.3, 1.0, 0.75}, {0.4, 0.75, 0.75}});
   EXPECT_DOUBLE_EQ(r.auc, 0.75);
   EXPECT_DOUBLE_EQ(r.max_recall_at_100_precision, 0.75);
   EXPECT_DOUBLE_EQ(r.recall_at_1, 0.75);
@@ -148,7 +148,7 @@ TEST(Evaluation, TiesNanRowsAndNegativesByHand)
 {
   const EvaluationResult r = openable::evaluatePrecisionRecall(fiveByThree(), fiveByThreeTruth());
   // Positives q0, q1, q3, q4. Threshold 1 accepts the tie q0 (right) and q2 (wrong) together.
-  expectCurve(r, { { 1.0, 0.5, 0.25 }, { 2.0, 2.0 / 3.0, 0.5 }, { 3.0, 0.75, 0.75 } });
+  expectCurve(r, {{1.0, 0.5, 0.25}, {2.0, 2.0 / 3.0, 0.5}, {3.0, 0.75, 0.75}});
   EXPECT_DOUBLE_EQ(r.auc, 0.25 * 0.5 + 0.25 * 2.0 / 3.0 + 0.25 * 0.75);
   EXPECT_DOUBLE_EQ(r.max_recall_at_100_precision, 0.0);  // the first threshold already holds a false positive
   EXPECT_DOUBLE_EQ(r.recall_at_1, 0.75);                 // q1 has no prediction: a miss, not a crash
@@ -162,8 +162,8 @@ TEST(Evaluation, MaskLeavesQueriesOut)
 {
   // Without q4: positives q0, q1, q3; AUC = 1/3 * 1/2 + 1/3 * 2/3 = 7/18.
   const EvaluationResult without_q4 =
-      openable::evaluatePrecisionRecall(fiveByThree(), fiveByThreeTruth(), { true, true, true, true, false });
-  expectCurve(without_q4, { { 1.0, 0.5, 1.0 / 3.0 }, { 2.0, 2.0 / 3.0, 2.0 / 3.0 } });
+      openable::evaluatePrecisionRecall(fiveByThree(), fiveByThreeTruth(), {true, true, true, true, false});
+  expectCurve(without_q4, {{1.0, 0.5, 1.0 / 3.0}, {2.0, 2.0 / 3.0, 2.0 / 3.0}});
   EXPECT_DOUBLE_EQ(without_q4.auc, 7.0 / 18.0);
   EXPECT_DOUBLE_EQ(without_q4.recall_at_1, 2.0 / 3.0);
   EXPECT_EQ(without_q4.masked_queries, 1);
@@ -171,8 +171,8 @@ TEST(Evaluation, MaskLeavesQueriesOut)
 
   // Without the false positive q2 every accepted prediction is right.
   const EvaluationResult without_q2 =
-      openable::evaluatePrecisionRecall(fiveByThree(), fiveByThreeTruth(), { true, true, false, true, true });
-  expectCurve(without_q2, { { 1.0, 1.0, 0.25 }, { 2.0, 1.0, 0.5 }, { 3.0, 1.0, 0.75 } });
+      openable::evaluatePrecisionRecall(fiveByThree(), fiveByThreeTruth(), {true, true, false, true, true});
+  expectCurve(without_q2, {{1.0, 1.0, 0.25}, {2.0, 1.0, 0.5}, {3.0, 1.0, 0.75}});
   EXPECT_DOUBLE_EQ(without_q2.auc, 0.75);
   EXPECT_DOUBLE_EQ(without_q2.max_recall_at_100_precision, 0.75);
 }
@@ -211,14 +211,20 @@ TEST(Evaluation, BadInputsAreClearErrors)
   expectError([&] { openable::evaluatePrecisionRecall(cv::Mat(4, 4, CV_8U, cv::Scalar(1)), aligned); }, "float32");
   expectError([&] { openable::evaluatePrecisionRecall(cv::Mat(4, 5, CV_32F, cv::Scalar(1)), aligned); },
               "is for a 4x4 matrix, but the distance matrix is 4x5");
-  expectError([&] { openable::evaluatePrecisionRecall(fourByFour(), aligned, { true, false }); },
-              "mask has 2 entries but the matrix has 4");
+  expectError(
+      [&] {
+        openable::evaluatePrecisionRecall(fourByFour(), aligned, {true, false});
+      },
+      "mask has 2 entries but the matrix has 4");
   // No positive query: recall would divide by zero.
-  const GroundTruth none({ {}, {} }, 0, 2, 2, true, "empty");
+  const GroundTruth none({{}, {}}, 0, 2, 2, true, "empty");
   expectError([&] { openable::evaluatePrecisionRecall(cv::Mat(2, 2, CV_32F, cv::Scalar(1)), none); },
               "none of the 2 evaluated queries");
-  expectError([&] { openable::evaluatePrecisionRecall(fiveByThree(), fiveByThreeTruth(), { false, false, true, false, false }); },
-              "none of the 1 evaluated queries");
+  expectError(
+      [&] {
+        openable::evaluatePrecisionRecall(fiveByThree(), fiveByThreeTruth(), {false, false, true, false, false});
+      },
+      "none of the 1 evaluated queries");
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -329,7 +335,8 @@ TEST(Evaluation, AgreesWithBruteForceOnARealSizedRandomMatrix)
   }
   const int tolerance = 2;
   const EvaluationResult r = openable::evaluatePrecisionRecall(m, openable::alignedGroundTruth(n, n, tolerance), keep);
-  const BruteForce b = bruteForce(m, [&](int q, int c) { return std::abs(q - c) <= tolerance; }, keep);
+  const BruteForce b = bruteForce(
+      m, [&](int q, int c) { return std::abs(q - c) <= tolerance; }, keep);
   expectSame(r, b);
   EXPECT_GT(r.queries_without_prediction, 0);
   EXPECT_GT(r.curve.size(), 100u);
@@ -359,9 +366,11 @@ TEST(Evaluation, AgreesWithBruteForceOnRealNordlandDistances)
   }
   const std::vector<bool> keep = openable::brightFrameMask(winter);
   const EvaluationResult r = openable::evaluatePrecisionRecall(m, openable::alignedGroundTruth(n, n, 1), keep);
-  expectSame(r, bruteForce(m, [](int q, int c) { return std::abs(q - c) <= 1; }, keep));
+  expectSame(r, bruteForce(
+                    m, [](int q, int c) { return std::abs(q - c) <= 1; }, keep));
   const EvaluationResult all = openable::evaluatePrecisionRecall(m, openable::alignedGroundTruth(n, n, 1));
-  expectSame(all, bruteForce(m, [](int q, int c) { return std::abs(q - c) <= 1; }, std::vector<bool>(n, true)));
+  expectSame(all, bruteForce(
+                      m, [](int q, int c) { return std::abs(q - c) <= 1; }, std::vector<bool>(n, true)));
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -385,11 +394,11 @@ TEST(GroundTruth, AlignedMatchesWithinTolerance)
 TEST(GroundTruth, PairsFileWithCommentsToleranceAndNoDeclaredShape)
 {
   TempDir dir;
-  const std::string file =
-      dir.file("pairs.txt", "# loops of a tiny sequence\n\n9 2\n9 0  # trailing comment\n  # indented comment\n7 3\n9 2\n");
+  const std::string file = dir.file(
+      "pairs.txt", "# loops of a tiny sequence\n\n9 2\n9 0  # trailing comment\n  # indented comment\n7 3\n9 2\n");
   const GroundTruth t = openable::loadPairsGroundTruth(file, 1);
   EXPECT_EQ(t.numPairs(), 3u);  // the repeated pair counts once
-  EXPECT_EQ(t.anchors(9), (std::vector<int>{ 0, 2 }));
+  EXPECT_EQ(t.anchors(9), (std::vector<int>{0, 2}));
   EXPECT_TRUE(t.isMatch(9, 1));  // one frame from both anchors
   EXPECT_TRUE(t.isMatch(9, 3));
   EXPECT_FALSE(t.isMatch(9, 4));
@@ -426,7 +435,7 @@ TEST(GroundTruth, PairsFileDeclaredShapeAndBadLines)
 
 TEST(GroundTruth, OutOfRangeAnchorOfAnExplicitGroundTruth)
 {
-  const GroundTruth t({ { 0 }, { 7 } }, 0, 2, 3, false, "hand-made");
+  const GroundTruth t({{0}, {7}}, 0, 2, 3, false, "hand-made");
   expectError([&] { t.checkFits(2, 3); }, "pair (1, 7) is out of range for a 2x3 distance matrix");
 }
 
@@ -441,9 +450,9 @@ TEST(GroundTruth, PublishedKittiFilesLoad)
     int first_i, first_j;
   };
   // Pair counts: lines of the files minus their one comment line; queries: distinct i.
-  for (const Case& c : { Case{ "groundTruth_KITTI00.txt", 4541, 31922, 788, 1560, 109 },
-                         Case{ "groundTruth_KITTI_05.txt", 2761, 10558, 415, 1300, 537 },
-                         Case{ "kitti06GroundTruth.txt", 1101, 3287, 272, 829, 0 } })
+  for (const Case& c : {Case{"groundTruth_KITTI00.txt", 4541, 31922, 788, 1560, 109},
+                        Case{"groundTruth_KITTI_05.txt", 2761, 10558, 415, 1300, 537},
+                        Case{"kitti06GroundTruth.txt", 1101, 3287, 272, 829, 0}})
   {
     const GroundTruth t = openable::loadPairsGroundTruth(kKitti + "/loop_ground_truth/" + c.file);
     EXPECT_EQ(t.numPairs(), c.pairs) << c.file;
@@ -466,11 +475,11 @@ TEST(GroundTruth, PublishedKittiFilesLoad)
 TEST(GroundTruth, LoopsFromHandMadePositions)
 {
   // Out along x and back slightly offset: frame 3 passes frame 1 at 0.5 m, frame 4 passes frame 0 at 1 m.
-  const std::vector<cv::Vec3d> p = { { 0, 0, 0 }, { 10, 0, 0 }, { 20, 0, 0 }, { 10, 0, 0.5 }, { 0, 0, 1 } };
+  const std::vector<cv::Vec3d> p = {{0, 0, 0}, {10, 0, 0}, {20, 0, 0}, {10, 0, 0.5}, {0, 0, 1}};
   const GroundTruth e1 = openable::posesGroundTruth(p, 2.0, 1);
   EXPECT_EQ(e1.numPairs(), 2u);
-  EXPECT_EQ(e1.anchors(3), std::vector<int>{ 1 });
-  EXPECT_EQ(e1.anchors(4), std::vector<int>{ 0 });
+  EXPECT_EQ(e1.anchors(3), std::vector<int>{1});
+  EXPECT_EQ(e1.anchors(4), std::vector<int>{0});
   EXPECT_FALSE(e1.isMatch(1, 3));
   // 3 - 1 = 2 frames is not more than an exclusion of 2.
   const GroundTruth e2 = openable::posesGroundTruth(p, 2.0, 2);
@@ -488,7 +497,7 @@ TEST(GroundTruth, KittiPosesFileAndBadLines)
 {
   const std::vector<cv::Vec3d> p = openable::loadKittiPositions(kKitti + "/poses/06.txt");
   ASSERT_EQ(p.size(), 1101u);
-  EXPECT_LT(cv::norm(p[0]), 1e-9);  // KITTI poses start at the identity (to rounding)
+  EXPECT_LT(cv::norm(p[0]), 1e-9);        // KITTI poses start at the identity (to rounding)
   EXPECT_NEAR(p[1][2], 1.198998, 1e-12);  // 12th number of the second line
   TempDir dir;
   const std::vector<cv::Vec3d> q =
@@ -513,11 +522,12 @@ TEST(GroundTruth, PosesAgreeWithPublishedKittiGroundTruthAtTheDefaults)
     std::string sequence, file;
     size_t pose_pairs, published_pairs, common_pairs, pose_queries, published_queries, common_queries;
   };
-  for (const Case& c : { Case{ "00", "groundTruth_KITTI00.txt", 15959, 31922, 14404, 819, 788, 781 },
-                         Case{ "05", "groundTruth_KITTI_05.txt", 8106, 10558, 6044, 459, 415, 413 },
-                         Case{ "06", "kitti06GroundTruth.txt", 3253, 3287, 3253, 271, 272, 271 } })
+  for (const Case& c : {Case{"00", "groundTruth_KITTI00.txt", 15959, 31922, 14404, 819, 788, 781},
+                        Case{"05", "groundTruth_KITTI_05.txt", 8106, 10558, 6044, 459, 415, 413},
+                        Case{"06", "kitti06GroundTruth.txt", 3253, 3287, 3253, 271, 272, 271}})
   {
-    const GroundTruth poses = openable::posesGroundTruth(openable::loadKittiPositions(kKitti + "/poses/" + c.sequence + ".txt"));
+    const GroundTruth poses =
+        openable::posesGroundTruth(openable::loadKittiPositions(kKitti + "/poses/" + c.sequence + ".txt"));
     const GroundTruth published = openable::loadPairsGroundTruth(kKitti + "/loop_ground_truth/" + c.file);
     const openable::GroundTruthAgreement a = openable::compareGroundTruth(poses, published);
     EXPECT_EQ(a.candidate_pairs, c.pose_pairs) << c.sequence;
@@ -531,8 +541,8 @@ TEST(GroundTruth, PosesAgreeWithPublishedKittiGroundTruthAtTheDefaults)
 
 TEST(GroundTruth, AgreementRatiosByHand)
 {
-  const GroundTruth a({ { 0, 1 }, {}, { 0 } }, 0, 3, 3, true, "a");
-  const GroundTruth b({ { 1 }, { 0 }, { 1 } }, 0, 3, 3, true, "b");
+  const GroundTruth a({{0, 1}, {}, {0}}, 0, 3, 3, true, "a");
+  const GroundTruth b({{1}, {0}, {1}}, 0, 3, 3, true, "b");
   const openable::GroundTruthAgreement x = openable::compareGroundTruth(a, b);
   // Pairs: a = {(0,0),(0,1),(2,0)}, b = {(0,1),(1,0),(2,1)}, common {(0,1)}, union 5.
   EXPECT_EQ(x.common_pairs, 1u);
@@ -548,18 +558,21 @@ TEST(GroundTruth, AgreementRatiosByHand)
 
 TEST(QueryMask, DarkFramesByMeanIntensity)
 {
-  const std::vector<cv::Mat> images = { cv::Mat(4, 4, CV_8U, cv::Scalar(9)), cv::Mat(4, 4, CV_8U, cv::Scalar(10)),
-                                        cv::Mat(4, 4, CV_8UC3, cv::Scalar(0, 0, 29)),   // mean 9.67
-                                        cv::Mat(4, 4, CV_8UC3, cv::Scalar(0, 0, 30)),   // mean 10
-                                        cv::Mat(2, 2, CV_16U, cv::Scalar(257 * 12)) };  // 12 on the 8-bit scale
-  EXPECT_EQ(openable::brightFrameMask(images), (std::vector<bool>{ false, true, false, true, true }));
+  const std::vector<cv::Mat> images = {cv::Mat(4, 4, CV_8U, cv::Scalar(9)), cv::Mat(4, 4, CV_8U, cv::Scalar(10)),
+                                       cv::Mat(4, 4, CV_8UC3, cv::Scalar(0, 0, 29)),  // mean 9.67
+                                       cv::Mat(4, 4, CV_8UC3, cv::Scalar(0, 0, 30)),  // mean 10
+                                       cv::Mat(2, 2, CV_16U, cv::Scalar(257 * 12))};  // 12 on the 8-bit scale
+  EXPECT_EQ(openable::brightFrameMask(images), (std::vector<bool>{false, true, false, true, true}));
   cv::Mat half(2, 2, CV_8U, cv::Scalar(0));
   half.row(0).setTo(20);  // mean exactly 10
-  EXPECT_EQ(openable::brightFrameMask({ half }), std::vector<bool>{ true });
-  EXPECT_EQ(openable::brightFrameMask({ half }, 10.5), std::vector<bool>{ false });
-  expectError([] { openable::brightFrameMask(std::vector<cv::Mat>{ cv::Mat() }); }, "image 0 is empty");
-  expectError([] { openable::brightFrameMask({ cv::Mat(2, 2, CV_8U), cv::Mat(2, 2, CV_32F, cv::Scalar(0.5)) }); },
-              "image 1 is not 8-bit or 16-bit");
+  EXPECT_EQ(openable::brightFrameMask({half}), std::vector<bool>{true});
+  EXPECT_EQ(openable::brightFrameMask({half}, 10.5), std::vector<bool>{false});
+  expectError([] { openable::brightFrameMask(std::vector<cv::Mat>{cv::Mat()}); }, "image 0 is empty");
+  expectError(
+      [] {
+        openable::brightFrameMask({cv::Mat(2, 2, CV_8U), cv::Mat(2, 2, CV_32F, cv::Scalar(0.5))});
+      },
+      "image 1 is not 8-bit or 16-bit");
 }
 
 TEST(QueryMask, NordlandWinterFolderAgreesWithAPixelSum)
@@ -592,7 +605,7 @@ TEST(QueryMask, NordlandWinterFolderAgreesWithAPixelSum)
 TEST(QueryMask, FileRoundTripAndBadLines)
 {
   TempDir dir;
-  const std::vector<bool> mask = { true, false, false, true };
+  const std::vector<bool> mask = {true, false, false, true};
   openable::saveQueryMask(dir.path("mask.txt"), mask);
   EXPECT_EQ(openable::loadQueryMask(dir.path("mask.txt")), mask);
   expectError([&] { openable::loadQueryMask(dir.file("bad.txt", "1\n0\n2\n")); }, "line 3 is not 1");
@@ -621,7 +634,7 @@ TEST(EvaluationOutput, PlotHasTheCurveInItsColourWhereItShouldBe)
   for (int i = 0; i < 50; ++i)
     m.at<float>(i, i) = 0.01F * i;
   const EvaluationResult perfect = openable::evaluatePrecisionRecall(m, openable::alignedGroundTruth(50, 50, 0));
-  const cv::Mat plot = openable::drawPrCurves({ { "perfect", perfect } }, "test");
+  const cv::Mat plot = openable::drawPrCurves({{"perfect", perfect}}, "test");
   ASSERT_EQ(plot.size(), cv::Size(800, 600));
   ASSERT_EQ(plot.type(), CV_8UC3);
   // Precision 1 at every recall: a horizontal line of the first series colour (BGR 180,119,31) along the
@@ -636,8 +649,8 @@ TEST(EvaluationOutput, PlotHasTheCurveInItsColourWhereItShouldBe)
   // The middle of the plot area stays white apart from grid lines (no curve passes there).
   const cv::Vec3b centre = plot.at<cv::Vec3b>(300, 445);
   EXPECT_EQ(centre, cv::Vec3b(255, 255, 255));
-  EXPECT_EQ(openable::drawPrCurves({ { "a", perfect }, { "b", perfect } }, "two", cv::Size(640, 480)).size(),
+  EXPECT_EQ(openable::drawPrCurves({{"a", perfect}, {"b", perfect}}, "two", cv::Size(640, 480)).size(),
             cv::Size(640, 480));
   expectError([] { openable::drawPrCurves({}, "none"); }, "no curve");
-  expectError([&] { openable::drawPrCurves({ { "a", perfect } }, "t", cv::Size(100, 100)); }, "too small");
+  expectError([&] { openable::drawPrCurves({{"a", perfect}}, "t", cv::Size(100, 100)); }, "too small");
 }

@@ -1,4 +1,6 @@
 // .npy reader and writer: exact bytes, round trips, and every way a file can be wrong.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -7,8 +9,6 @@
 #include <iterator>
 #include <limits>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "openable/error.h"
 #include "openable/npy.h"
@@ -104,8 +104,8 @@ TEST_F(NpyTest, WritesTheExactNumpyVersion1Layout)
   EXPECT_EQ(bytes.substr(10, dict.size()), dict);
   EXPECT_EQ(bytes.find_first_not_of(' ', 10 + dict.size()), 127u);
   EXPECT_EQ(bytes[127], '\n');
-  EXPECT_EQ(bytes.substr(128), rawBytes<float>({ 1.0F, 2.0F, 3.0F, 4.0F, 5.0F, 6.5F }));
-  EXPECT_EQ(bytes, handMadeNpy(dict, rawBytes<float>({ 1.0F, 2.0F, 3.0F, 4.0F, 5.0F, 6.5F })));
+  EXPECT_EQ(bytes.substr(128), rawBytes<float>({1.0F, 2.0F, 3.0F, 4.0F, 5.0F, 6.5F}));
+  EXPECT_EQ(bytes, handMadeNpy(dict, rawBytes<float>({1.0F, 2.0F, 3.0F, 4.0F, 5.0F, 6.5F})));
 }
 
 TEST_F(NpyTest, RoundTripKeepsEveryBitIncludingNanAndInfinity)
@@ -150,7 +150,7 @@ TEST_F(NpyTest, WriteLeavesNoTemporaryFileAndReplacesTheOldOne)
 TEST_F(NpyTest, ReadsFloat64AsFloat32)
 {
   writeBytes(path("d.npy"), handMadeNpy("{'descr': '<f8', 'fortran_order': False, 'shape': (2, 2), }",
-                                        rawBytes<double>({ 0.5, -2.25, 1e10, 3.0 })));
+                                        rawBytes<double>({0.5, -2.25, 1e10, 3.0})));
   const cv::Mat m = openable::readNpy(path("d.npy"));
   ASSERT_EQ(m.type(), CV_32F);
   ASSERT_EQ(m.size(), cv::Size(2, 2));
@@ -164,7 +164,7 @@ TEST_F(NpyTest, ReadsVersion2HeadersAndKeyOrderAsNumpyMayWriteThem)
 {
   // Key order and spacing differ from ours; version 2 has a 4-byte header length.
   writeBytes(path("v2.npy"), handMadeNpy("{'shape': (1, 3), 'fortran_order': False, 'descr': '<f4'}",
-                                         rawBytes<float>({ 1.0F, 2.0F, 3.0F }), 2));
+                                         rawBytes<float>({1.0F, 2.0F, 3.0F}), 2));
   const cv::Mat m = openable::readNpy(path("v2.npy"));
   ASSERT_EQ(m.size(), cv::Size(3, 1));
   EXPECT_EQ(m.at<float>(0, 2), 3.0F);
@@ -195,7 +195,7 @@ void expectReadError(const std::string& file, const std::string& needle)
 TEST_F(NpyTest, RejectsEveryUnsupportedOrCorruptFileWithAReason)
 {
   const std::string good = "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 2), }";
-  const std::string data = rawBytes<float>({ 1.0F, 2.0F, 3.0F, 4.0F });
+  const std::string data = rawBytes<float>({1.0F, 2.0F, 3.0F, 4.0F});
   expectReadError(path("missing.npy"), "cannot open");
   expectReadError(dir_.string(), "not a readable file");
 
@@ -249,6 +249,5 @@ TEST_F(NpyTest, RejectsWritingAnythingButAFloatMatrix)
   EXPECT_THROW(openable::writeNpy(path("f64.npy"), cv::Mat(2, 2, CV_64F, cv::Scalar(1))), openable::Error);
   EXPECT_THROW(openable::writeNpy(path("c3.npy"), cv::Mat(2, 2, CV_32FC3, cv::Scalar::all(1))), openable::Error);
   EXPECT_FALSE(fs::exists(path("u8.npy")));
-  EXPECT_THROW(openable::writeNpy(path("no/such/folder/m.npy"), cv::Mat(2, 2, CV_32F, cv::Scalar(1))),
-               openable::Error);
+  EXPECT_THROW(openable::writeNpy(path("no/such/folder/m.npy"), cv::Mat(2, 2, CV_32F, cv::Scalar(1))), openable::Error);
 }
