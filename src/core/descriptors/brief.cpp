@@ -104,14 +104,17 @@ void BriefExtractor::describeBinary(const Patch& patch, uint64_t* words) const
   // bit, does not depend on which SIMD path OpenCV picks on this CPU. Rows for the whole patch, columns
   // only at the sampled points.
   std::vector<double> rows(size_t(n) * n);
+  std::vector<double> line(n + 2 * radius);  // one mirrored row, so the inner loop needs no index mapping
   for (int y = 0; y < n; ++y)
   {
     const float* in = image.ptr<float>(y);
+    for (int x = -radius; x < n + radius; ++x)
+      line[x + radius] = in[reflect(x, n)];
     for (int x = 0; x < n; ++x)
     {
       double s = 0.0;
-      for (int k = -radius; k <= radius; ++k)
-        s += kernel_[k + radius] * in[reflect(x + k, n)];
+      for (int k = 0; k <= 2 * radius; ++k)
+        s += kernel_[k] * line[x + k];
       rows[size_t(y) * n + x] = s;
     }
   }

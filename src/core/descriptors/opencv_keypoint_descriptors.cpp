@@ -107,7 +107,9 @@ SiftExtractor::SiftExtractor(int patch_size) : patch_size_(patch_size)
 {
   if (patch_size < minPatchSize())
     throw Error("SIFT needs patch_size >= " + std::to_string(minPatchSize()) + ", got " + std::to_string(patch_size));
-  sift_ = cv::SIFT::create();
+  // One layer per octave: only the base layer (sigma 1.6) is used for a keypoint of octave 0, layer 0, and
+  // fewer layers make OpenCV build less of a pyramid that would go unused.
+  sift_ = cv::SIFT::create(0, 1);
 }
 
 void SiftExtractor::describeFloat(const Patch& patch, float* values) const
