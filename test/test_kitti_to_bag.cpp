@@ -207,6 +207,8 @@ TEST_F(KittiToBag, StereoPosesRangeAndCompression)
   {
     const auto tf = m.instantiate<tf2_msgs::TFMessage>();
     ASSERT_TRUE(tf);
+    ASSERT_TRUE(m.getConnectionHeader());
+    EXPECT_EQ(m.getConnectionHeader()->at("latching"), "1");  // rosbag play re-latches it
     ASSERT_EQ(tf->transforms.size(), 1u);
     EXPECT_EQ(tf->transforms[0].header.frame_id, "camera_left");
     EXPECT_EQ(tf->transforms[0].child_frame_id, "camera_right");

@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include <boost/make_shared.hpp>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <opencv2/imgcodecs.hpp>
@@ -529,7 +530,15 @@ int run(const Options& o, bool& bag_opened)
         t.transform.translation.x = baseline;
         t.transform.rotation.w = 1.0;
         tf_static.transforms.push_back(t);
-        bag.write("/tf_static", stamp, tf_static);
+        // Recorded as latched, as a live /tf_static is: `rosbag play` then latches it too, so nodes that
+        // start after the first frame still get camera_left -> camera_right.
+        auto header = boost::make_shared<ros::M_string>();
+        (*header)["type"] = ros::message_traits::datatype(tf_static);
+        (*header)["md5sum"] = ros::message_traits::md5sum(tf_static);
+        (*header)["message_definition"] = ros::message_traits::definition(tf_static);
+        (*header)["callerid"] = "/kitti_to_bag";
+        (*header)["latching"] = "1";
+        bag.write("/tf_static", stamp, tf_static, header);
       }
     }
 
