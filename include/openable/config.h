@@ -18,6 +18,7 @@ struct Config
   int panoramas = 6;                        ///< sub-panoramas per panoramic image (camera_type panoramic)
   bool illumination_invariance = false;     ///< paper Eq. 6 before description (needs colour input)
   double alpha = 0.47;                      ///< alpha of Eq. 6 (0.47 for KITTI's Flea2, see Eq. 7)
+  int patch_normalization = 0;              ///< block side for local contrast normalisation of patches (0 = off)
   std::string descriptor = "LDB";           ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG
 
   // Matching.
@@ -35,6 +36,7 @@ struct Config
   int stereo_block_size = 5;        ///< SGBM block size (odd, pixels)
 
   // Display.
+  std::string display_normalization = "minmax";  ///< distance matrix images: max (paper Eq. 5) | minmax (stretch)
   int color_map = 7;  ///< OpenABLE's 12 colour maps (0..11, OpenCV COLORMAP_AUTUMN .. COLORMAP_HOT)
 
   /// Errors of the form "key: value 'x' is not allowed; expected ...". Empty when valid.

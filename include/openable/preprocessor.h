@@ -14,6 +14,11 @@ namespace openable
 /// so a black pixel gives 0 and every other pixel gives exactly Eq. 6.
 cv::Mat illuminationInvariant(const cv::Mat& bgr, double alpha);
 
+/// Patch normalisation (as in SeqSLAM): every `block` x `block` block of a one-channel image is shifted and
+/// scaled to zero mean and unit standard deviation, so that local contrast, not absolute brightness, is
+/// described. Flat blocks become 0. block <= 0 returns the image unchanged.
+cv::Mat normalizeBlocks(const cv::Mat& image, int block);
+
 /// Turns a camera image into the patches to describe.
 ///
 /// Input: 8-bit grey, BGR or BGRA, any size. The image is first reduced to one channel (grey, or Eq. 6

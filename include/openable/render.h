@@ -7,6 +7,10 @@ namespace openable
 /// Paper Eq. 5: M' = M / max(M) on a CV_32F matrix; NaN cells stay NaN. An all-zero matrix stays zero.
 cv::Mat normalizeByMax(const cv::Mat& distances);
 
+/// Contrast stretch for display: (M - min) / (max - min) over the finite cells; NaN stays NaN. Distances of
+/// real images often span a narrow band (e.g. 0.18 .. 0.30), which Eq. 5 leaves washed out.
+cv::Mat normalizeMinMax(const cv::Mat& distances);
+
 /// Paper Eq. 9: 0 where M' < theta (a loop), 1 elsewhere; CV_8U 0 / 255 for display (NaN -> 255).
 cv::Mat thresholdView(const cv::Mat& normalized, double theta);
 

@@ -129,6 +129,8 @@ const std::vector<KeyAccess>& table()
     makeKey("illumination_invariance", "apply paper Eq. 6 before description (colour input)",
             &Config::illumination_invariance),
     makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha),
+    makeKey("patch_normalization", "block side (pixels of the patch) for local contrast normalisation; 0 = off",
+            &Config::patch_normalization),
     makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor),
     makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length),
     makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = off", &Config::threshold),
@@ -143,6 +145,9 @@ const std::vector<KeyAccess>& table()
     makeKey("stereo_num_disparities", "SGBM disparity range at 640 px width (pixels)",
             &Config::stereo_num_disparities),
     makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size),
+    makeKey("display_normalization", "distance matrix images: max (paper Eq. 5, M / max M) | minmax (contrast "
+                                     "stretch)",
+            &Config::display_normalization),
     makeKey("color_map", "distance matrix colour map 0..11 (AUTUMN BONE JET WINTER RAINBOW OCEAN SUMMER SPRING "
                          "COOL HSV PINK HOT)",
             &Config::color_map),
@@ -186,7 +191,7 @@ const std::vector<std::string>& Config::descriptorKeys()
 {
   static const std::vector<std::string> keys = { "camera_type", "description_type",      "patch_size",
                                                  "grid_x",      "grid_y",                "panoramas",
-                                                 "descriptor",  "illumination_invariance", "alpha",
+                                                 "descriptor",  "illumination_invariance", "alpha", "patch_normalization",
                                                  "stereo_num_disparities", "stereo_block_size" };
   return keys;
 }
@@ -229,6 +234,7 @@ std::vector<std::string> Config::validate() const
     bad("grid_x/grid_y", std::to_string(grid_x) + "x" + std::to_string(grid_y),
         "1x1 with description_type global (set description_type: grid to use a grid)");
   inRange("panoramas", panoramas, 1, 64);
+  inRange("patch_normalization", patch_normalization, 0, patch_size);
   if (!std::isfinite(alpha) || alpha < 0.0 || alpha > 1.0)
     bad("alpha", formatDouble(alpha), "a number in [0, 1]");
   const auto& names = descriptorNames();
@@ -252,6 +258,8 @@ std::vector<std::string> Config::validate() const
   inRange("stereo_num_disparities", stereo_num_disparities, 16, 1024);
   if (stereo_block_size < 1 || stereo_block_size > 31 || stereo_block_size % 2 == 0)
     bad("stereo_block_size", std::to_string(stereo_block_size), "an odd integer in [1, 31]");
+  if (display_normalization != "max" && display_normalization != "minmax")
+    bad("display_normalization", display_normalization, "max | minmax");
   inRange("color_map", color_map, 0, 11);
   return errors;
 }

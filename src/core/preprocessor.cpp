@@ -39,6 +39,25 @@ cv::Mat toOneChannel(const cv::Mat& image, bool invariant, double alpha)
 }
 }  // namespace
 
+cv::Mat normalizeBlocks(const cv::Mat& image, int block)
+{
+  if (block <= 0)
+    return image;
+  cv::Mat out(image.size(), CV_32F);
+  for (int y0 = 0; y0 < image.rows; y0 += block)
+    for (int x0 = 0; x0 < image.cols; x0 += block)
+    {
+      const cv::Rect r(x0, y0, std::min(block, image.cols - x0), std::min(block, image.rows - y0));
+      cv::Scalar mean, stddev;
+      cv::meanStdDev(image(r), mean, stddev);
+      // A flat block (sky, a wall in the dark) stays flat instead of amplifying noise to full contrast.
+      const double scale = stddev[0] > 1e-3 ? 1.0 / stddev[0] : 0.0;
+      cv::Mat dst = out(r);
+      image(r).convertTo(dst, CV_32F, scale, -mean[0] * scale);
+    }
+  return out;
+}
+
 cv::Mat illuminationInvariant(const cv::Mat& bgr, double alpha)
 {
   if (bgr.empty() || bgr.depth() != CV_8U || (bgr.channels() != 3 && bgr.channels() != 4))
@@ -105,7 +124,9 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
   const int p = config_.patch_size;
   cv::Mat small;
   cv::resize(image, small, cv::Size(across * p, down * p), 0, 0, cv::INTER_AREA);
-  return split(toOneChannel(small, config_.illumination_invariance, config_.alpha), cv::Mat(), across);
+  return split(normalizeBlocks(toOneChannel(small, config_.illumination_invariance, config_.alpha),
+                               config_.patch_normalization),
+               cv::Mat(), across);
 }
 
 std::vector<Patch> Preprocessor::patchesFromCameras(const std::vector<cv::Mat>& images) const

@@ -25,6 +25,28 @@ cv::Mat normalizeByMax(const cv::Mat& distances)
   return out;
 }
 
+cv::Mat normalizeMinMax(const cv::Mat& distances)
+{
+  CV_Assert(distances.type() == CV_32FC1);
+  float low = INFINITY, high = -INFINITY;
+  for (int y = 0; y < distances.rows; ++y)
+  {
+    const float* row = distances.ptr<float>(y);
+    for (int x = 0; x < distances.cols; ++x)
+      if (std::isfinite(row[x]))
+      {
+        low = std::min(low, row[x]);
+        high = std::max(high, row[x]);
+      }
+  }
+  cv::Mat out = distances.clone();
+  if (high > low)
+    out = (out - low) / (high - low);
+  else if (std::isfinite(low))
+    out.setTo(0.0f, out == out);  // all equal: zero, NaN kept (NaN != NaN)
+  return out;
+}
+
 cv::Mat thresholdView(const cv::Mat& normalized, double theta)
 {
   CV_Assert(normalized.type() == CV_32FC1);

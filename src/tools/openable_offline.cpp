@@ -318,7 +318,9 @@ int run(const Options& options)
   const fs::path out_dir(options.output);
   openable::writeNpy((out_dir / "distance_matrix.npy").string(), matrix);
   writePng((out_dir / "distance_matrix.png").string(),
-           openable::colorize(openable::normalizeByMax(matrix), config.color_map));
+           openable::colorize(config.display_normalization == "max" ? openable::normalizeByMax(matrix)
+                                                                    : openable::normalizeMinMax(matrix),
+                              config.color_map));
   if (config.threshold >= 0)
     writePng((out_dir / "distance_matrix_thresholded.png").string(), openable::thresholdView(matrix, config.threshold));
   openable::writeFileAtomically((out_dir / "loop_closures.csv").string(), csv.str());

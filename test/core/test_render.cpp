@@ -17,6 +17,17 @@ TEST(Render, NormalizeByMaxIsEquation5AndKeepsNaN)
   EXPECT_FLOAT_EQ(normalizeByMax(cv::Mat::zeros(2, 2, CV_32F)).at<float>(0, 0), 0.0f);
 }
 
+TEST(Render, MinMaxStretchesFiniteCellsToZeroOne)
+{
+  cv::Mat m = (cv::Mat_<float>(1, 4) << 0.2f, 0.3f, std::nanf(""), 0.25f);
+  const cv::Mat n = normalizeMinMax(m);
+  EXPECT_FLOAT_EQ(n.at<float>(0, 0), 0.0f);
+  EXPECT_FLOAT_EQ(n.at<float>(0, 1), 1.0f);
+  EXPECT_TRUE(std::isnan(n.at<float>(0, 2)));
+  EXPECT_NEAR(n.at<float>(0, 3), 0.5f, 1e-6);
+  EXPECT_FLOAT_EQ(normalizeMinMax(cv::Mat(2, 2, CV_32F, cv::Scalar(0.4f))).at<float>(1, 1), 0.0f);
+}
+
 TEST(Render, ThresholdViewIsEquation9)
 {
   cv::Mat m = (cv::Mat_<float>(1, 4) << 0.1f, 0.2f, 0.3f, std::nanf(""));
