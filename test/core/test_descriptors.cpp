@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-
 #include <opencv2/imgproc.hpp>
 
 #include "openable/descriptors.h"
@@ -20,7 +19,7 @@ using openable_test::sharedData;
 
 namespace
 {
-const std::vector<std::string> kMonoNames = { "LDB", "BRIEF", "BRISK", "ORB", "FREAK", "SIFT", "SURF", "HOG" };
+const std::vector<std::string> kMonoNames = {"LDB", "BRIEF", "BRISK", "ORB", "FREAK", "SIFT", "SURF", "HOG"};
 
 Config configFor(const std::string& name, int patch_size = 64)
 {
@@ -120,9 +119,9 @@ class EveryDescriptor : public ::testing::TestWithParam<std::string>
 // ---------------------------------------------------------------------------------------------------------
 TEST(DescriptorFactory, BuildsEveryNameWithItsLength)
 {
-  const std::map<std::string, int> lengths = { { "LDB", 1386 },  { "D-LDB", 2772 }, { "BRIEF", 256 },
-                                               { "BRISK", 512 }, { "ORB", 256 },    { "FREAK", 512 },
-                                               { "SIFT", 128 },  { "SURF", 64 },    { "HOG", 324 } };
+  const std::map<std::string, int> lengths = {{"LDB", 1386},  {"D-LDB", 2772}, {"BRIEF", 256},
+                                              {"BRISK", 512}, {"ORB", 256},    {"FREAK", 512},
+                                              {"SIFT", 128},  {"SURF", 64},    {"HOG", 324}};
   ASSERT_EQ(descriptorNames().size(), lengths.size());
   for (const auto& name : descriptorNames())
   {
@@ -177,9 +176,9 @@ TEST_P(EveryDescriptor, BrightnessChangeIsSmallComparedToAnotherPlace)
 {
   // Measured (rounded up at the 4th decimal). Every descriptor is invariant to a pure offset; what is left
   // comes from the saturated pixels. FREAK's 43 large receptive fields do not notice them at all.
-  const std::map<std::string, double> measured_worst_ratio = {
-    { "LDB", 0.0025 },   { "BRIEF", 0.0069 }, { "BRISK", 0.0086 }, { "ORB", 0.0181 },
-    { "FREAK", 0.0001 }, { "SIFT", 0.0162 },  { "SURF", 0.0097 },  { "HOG", 0.0229 } };
+  const std::map<std::string, double> measured_worst_ratio = {{"LDB", 0.0025},  {"BRIEF", 0.0069}, {"BRISK", 0.0086},
+                                                              {"ORB", 0.0181},  {"FREAK", 0.0001}, {"SIFT", 0.0162},
+                                                              {"SURF", 0.0097}, {"HOG", 0.0229}};
   const auto extractor = createDescriptorExtractor(configFor(GetParam()));
   double worst_ratio = 0.0;
   for (int i = 0; i < 200; i += 15)
@@ -207,8 +206,8 @@ TEST_P(EveryDescriptor, RealImagesFindTheSamePlaceAcrossTraversals)
 {
   // Measured: { pairs fraction (rounded down at the 4th decimal), hits of 40 }.
   const std::map<std::string, std::pair<double, int>> measured = {
-    { "LDB", { 0.9129, 16 } },   { "BRIEF", { 0.8434, 12 } }, { "BRISK", { 0.8751, 12 } }, { "ORB", { 0.8865, 12 } },
-    { "FREAK", { 0.7745, 8 } },  { "SIFT", { 0.9581, 26 } },  { "SURF", { 0.8312, 15 } },  { "HOG", { 0.9223, 21 } } };
+      {"LDB", {0.9129, 16}},  {"BRIEF", {0.8434, 12}}, {"BRISK", {0.8751, 12}}, {"ORB", {0.8865, 12}},
+      {"FREAK", {0.7745, 8}}, {"SIFT", {0.9581, 26}},  {"SURF", {0.8312, 15}},  {"HOG", {0.9223, 21}}};
   const auto extractor = createDescriptorExtractor(configFor(GetParam()));
   std::vector<Described> left, right;
   std::vector<Patch> left_patches, right_patches;
@@ -243,9 +242,10 @@ TEST_P(EveryDescriptor, RealImagesFindTheSamePlaceAcrossTraversals)
     hits += best == i;
   }
   const double fraction = double(closer) / compared;
-  std::printf("[ measured ] %s day_left -> day_right: same frame closer than another place in %.4f of pairs; "
-              "nearest is the same frame for %d / %zu; %.0f us per patch\n",
-              GetParam().c_str(), fraction, hits, left.size(), us_per_patch);
+  std::printf(
+      "[ measured ] %s day_left -> day_right: same frame closer than another place in %.4f of pairs; "
+      "nearest is the same frame for %d / %zu; %.0f us per patch\n",
+      GetParam().c_str(), fraction, hits, left.size(), us_per_patch);
   EXPECT_GE(fraction, measured.at(GetParam()).first);
   EXPECT_GE(hits, measured.at(GetParam()).second);
 }
@@ -255,7 +255,7 @@ TEST_P(EveryDescriptor, RealImagesFindTheSamePlaceAcrossTraversals)
 TEST_P(EveryDescriptor, EveryPatchSizeGivesADescriptorOrAClearError)
 {
   const cv::Mat image = gardensPoint("day_right", 42);
-  for (int size : { 8, 9, 12, 15, 16, 17, 24, 31, 32, 48, 63, 64, 100, 128, 256 })
+  for (int size : {8, 9, 12, 15, 16, 17, 24, 31, 32, 48, 63, 64, 100, 128, 256})
   {
     const Config config = configFor(GetParam(), size);
     std::unique_ptr<DescriptorExtractor> extractor;
@@ -278,7 +278,8 @@ TEST_P(EveryDescriptor, EveryPatchSizeGivesADescriptorOrAClearError)
 TEST_P(EveryDescriptor, RejectsBadPatches)
 {
   const auto extractor = createDescriptorExtractor(configFor(GetParam()));
-  auto run = [&](const Patch& p) {
+  auto run = [&](const Patch& p)
+  {
     std::vector<uint64_t> words(64);
     std::vector<float> values(1024);
     if (extractor->isBinary())
@@ -319,9 +320,6 @@ TEST_P(EveryDescriptor, FlatPatchIsDescribedWithoutNaN)
   EXPECT_EQ(d.distance(d), 0.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Descriptors, EveryDescriptor, ::testing::ValuesIn(kMonoNames),
-                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
-
 // ---------------------------------------------------------------------------------------------------------
 // Upright: the paper describes the patch without rotation. A patch turned by 180 degrees must give a very
 // different descriptor; a rotation-invariant one (OpenCV's BRISK without the no-long-pairs pattern) would
@@ -332,8 +330,8 @@ TEST(Upright, HalfTurnChangesTheDescriptor)
   Patch turned;
   cv::rotate(patch.intensity, turned.intensity, cv::ROTATE_180);
   // Measured (rounded down at the 4th decimal).
-  const std::map<std::string, double> measured = { { "BRIEF", 0.4257 }, { "BRISK", 0.5233 }, { "ORB", 0.2968 },
-                                                   { "FREAK", 0.6776 }, { "SIFT", 0.2633 },  { "SURF", 0.2139 } };
+  const std::map<std::string, double> measured = {{"BRIEF", 0.4257}, {"BRISK", 0.5233}, {"ORB", 0.2968},
+                                                  {"FREAK", 0.6776}, {"SIFT", 0.2633},  {"SURF", 0.2139}};
   for (const auto& [name, expected] : measured)
   {
     const auto extractor = createDescriptorExtractor(configFor(name));
@@ -356,6 +354,10 @@ TEST(OwnPatterns, AreFixed)
     EXPECT_LT(c, 0.5f);
   }
   std::printf("[ golden ] BRIEF first pair %.9g %.9g %.9g %.9g\n", unit[0], unit[1], unit[2], unit[3]);
+  EXPECT_EQ(unit[0], -0.0439449959f);
+  EXPECT_EQ(unit[1], 0.179408923f);
+  EXPECT_EQ(unit[2], -0.0401613228f);
+  EXPECT_EQ(unit[3], -0.315773875f);
 
   const auto& pairs = FreakExtractor::pairs();
   ASSERT_EQ(pairs.size(), 512u);
@@ -372,13 +374,46 @@ TEST(OwnPatterns, AreFixed)
     EXPECT_LE(f.x + f.sigma, 64 + 1e-9);
   }
 
-  const Patch patch = patchOf(gardensPoint("day_left", 0));
-  for (const std::string name : { "BRIEF", "FREAK" })
+  // A synthetic patch from integer arithmetic only (no JPEG decoder, no resampling), so these values must be
+  // the same on every machine.
+  Patch patch;
+  patch.intensity.create(64, 64, CV_32F);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      patch.intensity.at<float>(y, x) = float(((x * 7 + y * 13) % 31) * 4 + (x * y) % 17 + 2 * x);
+  const std::map<std::string, uint64_t> golden = {{"BRIEF", 0x72aafd52329161a1ULL}, {"FREAK", 0x988afd9c3fb0f60aULL}};
+  for (const auto& [name, expected] : golden)
   {
     const auto extractor = createDescriptorExtractor(configFor(name));
-    std::printf("[ golden ] %s fingerprint 0x%016llx\n", name.c_str(),
-                static_cast<unsigned long long>(fingerprint(describe(*extractor, patch).words)));
+    const uint64_t print = fingerprint(describe(*extractor, patch).words);
+    std::printf("[ golden ] %s fingerprint 0x%016llx\n", name.c_str(), static_cast<unsigned long long>(print));
+    EXPECT_EQ(print, expected) << name;
   }
+  float surf[64];
+  SurfExtractor(64).describeFloat(patch, surf);
+  std::printf("[ golden ] SURF %.7f %.7f %.7f %.7f\n", surf[0], surf[1], surf[2], surf[3]);
+  EXPECT_NEAR(surf[0], 0.0049571, 1e-6);
+  EXPECT_NEAR(surf[1], 0.0053346, 1e-6);
+  EXPECT_NEAR(surf[2], -0.0014645, 1e-6);
+  EXPECT_NEAR(surf[3], 0.0042913, 1e-6);
+}
+
+// The illumination-invariant image (Eq. 6) has values around 0, often negative: every descriptor describes it
+// (the OpenCV ones through the min-max stretch to 8 bits) and still tells places apart.
+TEST_P(EveryDescriptor, DescribesIlluminationInvariantPatches)
+{
+  Config config = configFor(GetParam());
+  config.illumination_invariance = true;
+  const Preprocessor preprocessor(config);
+  const auto extractor = createDescriptorExtractor(config);
+  const Patch a = preprocessor.patches(gardensPoint("day_right", 20)).at(0);
+  const Patch b = preprocessor.patches(gardensPoint("day_right", 120)).at(0);
+  double low = 0, high = 0;
+  cv::minMaxLoc(a.intensity, &low, &high);
+  ASSERT_LT(high - low, 10.0);  // far from the 0..255 grey range
+  const Described da = describe(*extractor, a);
+  EXPECT_EQ(da.distance(describe(*extractor, a)), 0.0);
+  EXPECT_GT(da.distance(describe(*extractor, b)), 0.05) << GetParam();
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -462,3 +497,6 @@ TEST(Dldb, EurocRevisitIsTheNearestPair)
   EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[2]));
   EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[3]));
 }
+
+INSTANTIATE_TEST_SUITE_P(Descriptors, EveryDescriptor, ::testing::ValuesIn(kMonoNames),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });

@@ -3,7 +3,6 @@
 
 #include <cmath>
 #include <cstdio>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
