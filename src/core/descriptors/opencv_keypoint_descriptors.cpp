@@ -12,12 +12,21 @@ namespace openable
 {
 namespace
 {
-/// Mirror margin around the patch: OpenCV drops a keypoint whose sampling pattern would leave the image, and
-/// every pattern here spans the whole patch. Half a patch on each side puts the centre a full patch away
-/// from every border, more than any of the three patterns reaches.
+/// Mirror margin around the patch for ORB and BRISK: OpenCV drops a keypoint whose sampling pattern would
+/// leave the image, and both patterns here span the whole patch. Half a patch on each side puts the centre a
+/// full patch away from every border, more than either pattern (with its smoothing) reaches.
 int marginFor(int patch_size)
 {
   return patch_size / 2 + 2;
+}
+
+/// SIFT keeps its keypoint at any distance from the border (it skips samples outside the image), but its 4x4
+/// histograms interpolate half a bin (patch_size / 8) beyond the patch and need one more pixel for the
+/// gradient: that much real (mirrored) data is enough. A smaller image matters for SIFT, whose Gaussian
+/// pyramid costs time in proportion to the pixels.
+int siftMarginFor(int patch_size)
+{
+  return patch_size / 8 + 2;
 }
 
 /// Describes the keypoint `key` of `image` (8-bit, padded) and returns the one descriptor row. Throws rather
@@ -34,18 +43,17 @@ cv::Mat computeOne(cv::Feature2D& extractor, const cv::Mat& image, const cv::Key
   return out;
 }
 
-cv::KeyPoint centreKey(int patch_size, float size)
+cv::KeyPoint centreKey(int patch_size, int margin, float size)
 {
-  const float margin = static_cast<float>(marginFor(patch_size));
   // Pixel centres are at integer coordinates, so the centre of a patch_size-wide patch is (patch_size - 1) / 2.
-  const float centre = margin + 0.5f * (patch_size - 1);
+  const float centre = static_cast<float>(margin) + 0.5f * (patch_size - 1);
   return cv::KeyPoint(centre, centre, size, 0.0f /* upright */, 0.0f, 0 /* octave 0, layer 0 */);
 }
 
-cv::Mat paddedEightBit(const Patch& patch, const std::string& name, int patch_size)
+cv::Mat paddedEightBit(const Patch& patch, const std::string& name, int patch_size, int margin)
 {
   descriptors::checkIntensityPatch(name, patch.intensity, patch_size);
-  return descriptors::padReflect(descriptors::toEightBit(patch.intensity), marginFor(patch_size));
+  return descriptors::padReflect(descriptors::toEightBit(patch.intensity), margin);
 }
 }  // namespace
 
@@ -62,8 +70,9 @@ OrbExtractor::OrbExtractor(int patch_size) : patch_size_(patch_size)
 
 void OrbExtractor::describeBinary(const Patch& patch, uint64_t* words) const
 {
-  const cv::Mat image = paddedEightBit(patch, name(), patch_size_);
-  const cv::Mat d = computeOne(*orb_, image, centreKey(patch_size_, float(patch_size_)), name(), patch_size_);
+  const int margin = marginFor(patch_size_);
+  const cv::Mat image = paddedEightBit(patch, name(), patch_size_, margin);
+  const cv::Mat d = computeOne(*orb_, image, centreKey(patch_size_, margin, float(patch_size_)), name(), patch_size_);
   if (d.cols * 8 != length())
     throw Error("ORB returned " + std::to_string(d.cols * 8) + " bits; expected 256");
   descriptors::packBytes(d.ptr<uint8_t>(), d.cols, words, wordsForBits(length()));
@@ -96,9 +105,10 @@ BriskExtractor::BriskExtractor(int patch_size) : patch_size_(patch_size)
 
 void BriskExtractor::describeBinary(const Patch& patch, uint64_t* words) const
 {
-  const cv::Mat image = paddedEightBit(patch, name(), patch_size_);
+  const int margin = marginFor(patch_size_);
+  const cv::Mat image = paddedEightBit(patch, name(), patch_size_, margin);
   // Size 1 selects BRISK's finest scale, the one its pattern was scaled for above.
-  const cv::Mat d = computeOne(*brisk_, image, centreKey(patch_size_, 1.0f), name(), patch_size_);
+  const cv::Mat d = computeOne(*brisk_, image, centreKey(patch_size_, margin, 1.0f), name(), patch_size_);
   descriptors::packBytes(d.ptr<uint8_t>(), d.cols, words, wordsForBits(length()));
 }
 
@@ -114,10 +124,11 @@ SiftExtractor::SiftExtractor(int patch_size) : patch_size_(patch_size)
 
 void SiftExtractor::describeFloat(const Patch& patch, float* values) const
 {
-  const cv::Mat image = paddedEightBit(patch, name(), patch_size_);
+  const int margin = siftMarginFor(patch_size_);
+  const cv::Mat image = paddedEightBit(patch, name(), patch_size_, margin);
   // SIFT's 4x4 histograms are 3 * size / 2 pixels wide each: size = patch_size / 6 makes them tile the patch.
   const cv::Mat d =
-      computeOne(*sift_, image, centreKey(patch_size_, patch_size_ / 6.0f), name(), patch_size_);
+      computeOne(*sift_, image, centreKey(patch_size_, margin, patch_size_ / 6.0f), name(), patch_size_);
   if (d.cols != length() || d.type() != CV_32F)
     throw Error("SIFT returned " + std::to_string(d.cols) + " values; expected 128 floats");
   std::memcpy(values, d.ptr<float>(), sizeof(float) * length());
