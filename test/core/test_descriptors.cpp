@@ -177,7 +177,7 @@ TEST_P(EveryDescriptor, BrightnessChangeIsSmallComparedToAnotherPlace)
   // Measured (rounded up at the 4th decimal). Every descriptor is invariant to a pure offset; what is left
   // comes from the saturated pixels. FREAK's 43 large receptive fields do not notice them at all.
   const std::map<std::string, double> measured_worst_ratio = {{"LDB", 0.0025},  {"BRIEF", 0.0069}, {"BRISK", 0.0086},
-                                                              {"ORB", 0.0181},  {"FREAK", 0.0001}, {"SIFT", 0.0162},
+                                                              {"ORB", 0.0181},  {"FREAK", 0.0001}, {"SIFT", 0.0158},
                                                               {"SURF", 0.0097}, {"HOG", 0.0229}};
   const auto extractor = createDescriptorExtractor(configFor(GetParam()));
   double worst_ratio = 0.0;
@@ -331,7 +331,7 @@ TEST(Upright, HalfTurnChangesTheDescriptor)
   cv::rotate(patch.intensity, turned.intensity, cv::ROTATE_180);
   // Measured (rounded down at the 4th decimal).
   const std::map<std::string, double> measured = {{"BRIEF", 0.4257}, {"BRISK", 0.5233}, {"ORB", 0.2968},
-                                                  {"FREAK", 0.6776}, {"SIFT", 0.2633},  {"SURF", 0.2139}};
+                                                  {"FREAK", 0.6776}, {"SIFT", 0.2640},  {"SURF", 0.2139}};
   for (const auto& [name, expected] : measured)
   {
     const auto extractor = createDescriptorExtractor(configFor(name));
