@@ -91,8 +91,8 @@ private:
     std::vector<uint16_t> count;
   };
   const uint64_t* recentQuery(size_t age) const;
-  void advanceForward(const PlaceDatabase& reference, uint64_t new_first, size_t columns);
-  void advanceReverse(const PlaceDatabase& reference, uint64_t new_first, size_t columns);
+  void advanceForward(const PlaceDatabase& reference, size_t columns);
+  void advanceReverse(const PlaceDatabase& reference, size_t columns);
 
   FrameMetric metric_;
   int sequence_length_;
@@ -101,6 +101,7 @@ private:
   uint64_t first_id_ = 0;
   Chains forward_;
   Chains reverse_;
+  Chains next_;  ///< the next frame's chains are built here, then swapped in (no copy)
   std::vector<uint64_t> recent_;  ///< ring of the last L + 1 query descriptors
   std::vector<uint32_t> current_distances_;
   std::vector<uint32_t> dropped_distances_;

@@ -91,116 +91,112 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
     first_id_ = new_first;
   }
   current_distances_.resize(candidates);
-  advanceForward(reference, new_first, candidates);
+  advanceForward(reference, candidates);
   if (bidirectional_)
-    advanceReverse(reference, new_first, candidates);
+    advanceReverse(reference, candidates);
 }
 
-void SequenceMatcher::advanceForward(const PlaceDatabase& reference, uint64_t, size_t columns)
+void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t columns)
 {
   const size_t L = sequence_length_;
-  // Columns that did not exist at the previous frame start with count 0 (no chain).
-  const size_t old_columns = forward_.sum.size();
-  forward_.sum.resize(std::max(old_columns, columns), 0u);
-  forward_.count.resize(std::max(old_columns, columns), 0);
-  uint32_t* sum = forward_.sum.data();
-  uint16_t* count = forward_.count.data();
-  const bool can_drop = queries_ > L;  // the query L frames ago exists
+  const Chains& old = forward_;  // the previous frame's chains; columns that did not exist have count 0
+  Chains& next = next_;
+  next.sum.resize(columns);
+  next.count.resize(columns);
+  // With L = 1 every sequence is the current frame alone: nothing to carry over or drop.
+  const bool can_drop = queries_ > L && L > 1;  // the query L frames ago exists
   const uint64_t* query = recentQuery(0);
   const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
+  uint32_t* current = current_distances_.data();
   dropped_distances_.resize(kChunk);
 
-  // Descending, so that column c - 1 still holds the previous frame's value when column c reads it.
-  for (size_t end = columns; end > 0;)
+  // Ascending: the descriptors L frames back, needed for the leaving term, were read one or two chunks
+  // ago and are still in cache, so the history is streamed from memory only once per frame.
+  for (size_t begin = 0; begin < columns; begin += kChunk)
   {
-    const size_t begin = end > kChunk ? end - kChunk : 0;
-    uint32_t* current = current_distances_.data();
+    const size_t end = std::min(columns, begin + kChunk);
     metric_.row(query, reference.descriptor(begin), end - begin, current + begin);
-    // d(t - L, j - L) for the columns of this chunk whose j - L is stored.
-    const size_t drop_begin = std::max(begin, L);
+    const size_t drop_begin = std::max(begin, L);  // d(t - L, j - L) where j - L is stored
     if (can_drop && drop_begin < end)
       metric_.row(leaving_query, reference.descriptor(drop_begin - L), end - drop_begin,
                   dropped_distances_.data() + (drop_begin - begin));
-    for (size_t c = end; c-- > begin;)
+    for (size_t c = begin; c < end; ++c)
     {
-      const uint16_t previous_count = c > 0 ? count[c - 1] : 0;
+      const uint16_t previous_count = (L > 1 && c > 0 && c - 1 < old.count.size()) ? old.count[c - 1] : 0;
       if (previous_count == 0)
       {
-        sum[c] = current[c];
-        count[c] = 1;
+        next.sum[c] = current[c];
+        next.count[c] = 1;
       }
       else if (previous_count < L)
       {
-        sum[c] = sum[c - 1] + current[c];
-        count[c] = previous_count + 1;
+        next.sum[c] = old.sum[c - 1] + current[c];
+        next.count[c] = previous_count + 1;
       }
       else if (c >= L && can_drop)
       {
-        sum[c] = sum[c - 1] + current[c] - dropped_distances_[c - begin];
-        count[c] = static_cast<uint16_t>(L);
+        next.sum[c] = old.sum[c - 1] + current[c] - dropped_distances_[c - begin];
+        next.count[c] = static_cast<uint16_t>(L);
       }
       else
       {
         // The frame leaving the sequence was evicted from a bounded history: the chain starts again.
-        sum[c] = current[c];
-        count[c] = 1;
+        next.sum[c] = current[c];
+        next.count[c] = 1;
       }
     }
-    end = begin;
   }
-  forward_.sum.resize(columns);
-  forward_.count.resize(columns);
+  std::swap(forward_, next_);
 }
 
-void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, uint64_t, size_t columns)
+void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t columns)
 {
   const size_t L = sequence_length_;
-  const size_t old_columns = reverse_.sum.size();
-  reverse_.sum.resize(std::max(old_columns, columns), 0u);
-  reverse_.count.resize(std::max(old_columns, columns), 0);
-  uint32_t* sum = reverse_.sum.data();
-  uint16_t* count = reverse_.count.data();
+  const Chains& old = reverse_;
+  Chains& next = next_;
+  next.sum.resize(columns);
+  next.count.resize(columns);
   const size_t stored = reference.size();
   const bool can_drop = queries_ > L;
   const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
   const uint32_t* current = current_distances_.data();
   dropped_distances_.resize(kChunk);
 
-  // Ascending, so that column c + 1 still holds the previous frame's value when column c reads it:
-  // R_t[j] = R_{t-1}[j + 1] + d(t, j) - d(t - L, j + L).
-  for (size_t begin = 0; begin < columns; begin += kChunk)
+  // R_t[j] = R_{t-1}[j + 1] + d(t, j) - d(t - L, j + L). Descending, so that the descriptors L frames
+  // ahead were read one or two chunks ago.
+  for (size_t end = columns; end > 0;)
   {
-    const size_t end = std::min(columns, begin + kChunk);
+    const size_t begin = end > kChunk ? end - kChunk : 0;
     const size_t drop_end = std::min(end, stored > L ? stored - L : 0);
     if (can_drop && begin < drop_end)
       metric_.row(leaving_query, reference.descriptor(begin + L), drop_end - begin, dropped_distances_.data());
     for (size_t c = begin; c < end; ++c)
     {
-      const uint16_t previous_count = c + 1 < old_columns ? count[c + 1] : 0;
+      const uint16_t previous_count = c + 1 < old.count.size() ? old.count[c + 1] : 0;
       if (previous_count == 0)
       {
-        sum[c] = current[c];
-        count[c] = 1;
+        next.sum[c] = current[c];
+        next.count[c] = 1;
       }
       else if (previous_count < L)
       {
-        sum[c] = sum[c + 1] + current[c];
-        count[c] = previous_count + 1;
+        next.sum[c] = old.sum[c + 1] + current[c];
+        next.count[c] = previous_count + 1;
       }
       else if (c < drop_end && can_drop)
       {
-        sum[c] = sum[c + 1] + current[c] - dropped_distances_[c - begin];
-        count[c] = static_cast<uint16_t>(L);
+        next.sum[c] = old.sum[c + 1] + current[c] - dropped_distances_[c - begin];
+        next.count[c] = static_cast<uint16_t>(L);
       }
       else
       {
-        sum[c] = current[c];
-        count[c] = 1;
+        next.sum[c] = current[c];
+        next.count[c] = 1;
       }
     }
+    end = begin;
   }
-  reverse_.sum.resize(columns);
-  reverse_.count.resize(columns);
+  std::swap(reverse_, next_);
 }
 
 float SequenceMatcher::normalized(size_t column, int* direction) const

@@ -164,3 +164,23 @@ TEST(Preprocessor, DisparityIsAveragedOverValidPixelsAndScaledToThePatch)
   EXPECT_THROW(p.patchesWithDisparity(left, cv::Mat(32, 32, CV_16SC1)), Error);
   EXPECT_THROW(p.patchesWithDisparity(left, cv::Mat(16, 32, CV_32FC1)), Error);
 }
+
+TEST(Preprocessor, PatchNormalizationGivesZeroMeanUnitStdBlocksAndKeepsFlatBlocksFlat)
+{
+  cv::Mat image(16, 16, CV_32F, cv::Scalar(50));
+  cv::Mat left = image(cv::Rect(0, 0, 8, 16));
+  cv::randu(left, 0, 255);  // textured left half, flat right half
+  const cv::Mat out = normalizeBlocks(image, 8);
+  for (int by = 0; by < 2; ++by)
+  {
+    cv::Scalar mean, stddev;
+    cv::meanStdDev(out(cv::Rect(0, by * 8, 8, 8)), mean, stddev);
+    EXPECT_NEAR(mean[0], 0.0, 1e-4);
+    EXPECT_NEAR(stddev[0], 1.0, 1e-4);
+    EXPECT_EQ(cv::countNonZero(out(cv::Rect(8, by * 8, 8, 8))), 0);
+  }
+  // Brightness and contrast changes of a block do not change its normalised values.
+  cv::Mat brighter = image * 0.5 + 30;
+  EXPECT_LT(cv::norm(normalizeBlocks(brighter, 8), out, cv::NORM_INF), 1e-3);
+  EXPECT_EQ(cv::norm(normalizeBlocks(image, 0), image, cv::NORM_INF), 0.0);
+}
