@@ -183,6 +183,7 @@ private:
   uint64_t frames_stored_ = 0;
   uint64_t frames_skipped_keyframe_ = 0;
   uint64_t loops_accepted_ = 0;
+  uint64_t matrix_published_ = 0;
   std::map<std::string, uint64_t> rejected_;
   uint64_t received_at_last_diagnostic_ = 0;
   uint64_t rejected_at_last_diagnostic_ = 0;

@@ -498,6 +498,7 @@ void DetectorBase::publishMatrixLocked(const std_msgs::Header& header)
   last_matrix_time_ = now;
   sensor_msgs::ImagePtr msg = cv_bridge::CvImage(header, sensor_msgs::image_encodings::BGR8, picture).toImageMsg();
   matrix_pub_.publish(msg);
+  ++matrix_published_;
 }
 
 void DetectorBase::publishMarkersLocked(const std_msgs::Header& header, bool force)
@@ -832,6 +833,7 @@ void DetectorBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
   status.add("match latency last (ms)", match_latency_.last_ms);
   status.add("match latency mean (ms)", match_latency_.mean());
   status.add("loop closures", loops_accepted_);
+  status.add("distance_matrix images published", matrix_published_);
 }
 
 }  // namespace openable_ros

@@ -201,3 +201,9 @@ TEST(DistanceMatrixView, ClearAndModeChangeStartOver)
   view.setMode(DistanceMatrixView::Mode::kRollingWindow);
   EXPECT_EQ(view.rows(), 0);
 }
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
