@@ -11,7 +11,8 @@
 //      it is moved to the odometry child frame through tf (camera -> base, usually static);
 //   4. loop edges get a robust loss (Cauchy by default): a wrong loop that slipped through is down-weighted
 //      instead of bending the map;
-//   5. after each loop the graph is optimised; the corrected keyframe path is published (`path`, in
+//   5. new loops are optimised in batches (a wall-clock timer, ~optimise_period) so that a slow optimisation
+//      never makes the odometry queue overflow; the corrected keyframe path is published (`path`, in
 //      ~map_frame), loop edges as markers (`loop_markers`), and the map -> odom tf that makes
 //      map -> base equal to the corrected pose.
 //
@@ -30,6 +31,7 @@
 //       with ~unverified_sigma_translation (double, 3.0 m) and free rotation
 //   ~odometry_history (int, 100000): odometry samples kept to place image stamps between keyframes
 //   ~max_interpolation_gap (double, 0.5 s): larger gaps between odometry samples are not interpolated
+//   ~optimise_period (double, 0.5 s): how often new loops are optimised (wall clock, works with a paused bag)
 //   ~publish_tf (bool, true)
 
 #include <algorithm>
@@ -127,8 +129,13 @@ public:
     readParameters(pnh);
     path_pub_ = nh.advertise<nav_msgs::Path>("path", 1, true);
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_markers", 1, true);
-    odom_sub_ = nh.subscribe("odom", 100, &PoseGraphNode::odometryCallback, this);
+    // Deep odometry queue: an optimisation may hold the (single) callback thread for a fraction of a second.
+    odom_sub_ = nh.subscribe("odom", 1000, &PoseGraphNode::odometryCallback, this);
     loop_sub_ = nh.subscribe("loop_closures", 100, &PoseGraphNode::loopCallback, this);
+    optimise_timer_ = nh.createWallTimer(ros::WallDuration(optimise_period_), [this](const ros::WallTimerEvent&) {
+      if (dirty_)
+        optimise();
+    });
     ROS_INFO("pose_graph_node: keyframes every %.2f m / %.2f rad of %s, loops from %s, %s loss, map frame '%s'",
              keyframe_distance_, keyframe_angle_, odom_sub_.getTopic().c_str(), loop_sub_.getTopic().c_str(),
              loss_name_.c_str(), map_frame_.c_str());
@@ -171,6 +178,7 @@ private:
     positive(pnh, "default_loop_sigma_rotation", default_loop_sigma_rotation_, 0.05);
     positive(pnh, "unverified_sigma_translation", unverified_sigma_translation_, 3.0);
     positive(pnh, "max_interpolation_gap", max_interpolation_gap_, 0.5);
+    positive(pnh, "optimise_period", optimise_period_, 0.5);
     pnh.param("use_unverified", use_unverified_, false);
     pnh.param("publish_tf", publish_tf_, true);
     int history = 100000;
@@ -220,10 +228,12 @@ private:
     if (!history_.empty())
     {
       const ros::Time newest = history_.back().stamp;
-      if (msg->header.stamp + ros::Duration(1.0) < newest)
+      if (msg->header.stamp <= keyframes_.front().stamp)
       {
-        // A jump back in time (bag restarted with --loop, sim time reset): the graph belongs to another run.
-        ROS_WARN("pose_graph_node: odometry jumped back in time from %.3f to %.3f; clearing the graph",
+        // Before the very first keyframe: time jumped back (bag restarted with --loop, sim time reset), the
+        // graph belongs to another run. A merely late sample lands inside the history instead.
+        ROS_WARN("pose_graph_node: odometry jumped back in time from %.3f to %.3f, before the first keyframe; "
+                 "clearing the graph",
                  newest.toSec(), msg->header.stamp.toSec());
         reset();
       }
@@ -392,7 +402,7 @@ private:
     }
     graph_.addLoop(match.node, query.node, measurement, information);
     loops_.push_back(std::make_pair(match.node, query.node));
-    optimise();
+    dirty_ = true;
     if (retry)
       ROS_DEBUG("pose_graph_node: loop %u -> %u added after waiting for odometry", msg.query_id, msg.match_id);
     return true;
@@ -462,6 +472,7 @@ private:
 
   void optimise()
   {
+    dirty_ = false;
     const openable::PoseGraphSummary summary = graph_.optimize();
     if (!summary.usable)
     {
@@ -548,6 +559,7 @@ private:
     history_.clear();
     pending_.clear();
     loops_.clear();
+    dirty_ = false;
   }
 
   // Parameters.
@@ -560,6 +572,7 @@ private:
   double default_loop_sigma_rotation_ = 0.05;
   double unverified_sigma_translation_ = 3.0;
   double max_interpolation_gap_ = 0.5;
+  double optimise_period_ = 0.5;
   bool use_unverified_ = false;
   bool publish_tf_ = true;
   size_t odometry_history_ = 100000;
@@ -575,11 +588,13 @@ private:
   std::string child_frame_;
   size_t ignored_unverified_ = 0;
   size_t unmatched_ = 0;
+  bool dirty_ = false;  // loops added since the last optimisation
 
   ros::Subscriber odom_sub_;
   ros::Subscriber loop_sub_;
   ros::Publisher path_pub_;
   ros::Publisher marker_pub_;
+  ros::WallTimer optimise_timer_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
