@@ -22,15 +22,10 @@ workspace:
 build: deps workspace
 	$(CATKIN_MAKE)
 
-# Builds every test (gtest + rostest), runs them and prints catkin_test_results' summary.
-# Exits non-zero when any test failed or did not run.
+# Builds every test (gtest + rostest), runs them, prints the summary; non-zero exit when anything failed.
 test: build
 	$(CATKIN_MAKE) tests
-	cd $(WS) && $(CATKIN_ENV) bash -c 'source devel/setup.bash && catkin_make run_tests -j1 -DPYTHON_EXECUTABLE=/usr/bin/python3 > $(CURDIR)/build/run_tests.log 2>&1; \
-	  rc=$$?; grep -E "^\[ *(RUN|OK|FAILED|PASSED) *\]|FAILURE|Error" $(CURDIR)/build/run_tests.log | grep -vE "^\[ *(RUN|OK) *\]" | tail -n 60; \
-	  catkin_test_results --verbose build/test_results > $(CURDIR)/build/test_results.txt; trc=$$?; \
-	  grep -vE "^(Skipping|$$)" $(CURDIR)/build/test_results.txt | grep -E "failure|error|Summary|test" | tail -n 40; \
-	  [ $$rc -eq 0 ] && [ $$trc -eq 0 ]'
+	@bash scripts/run_tests.sh $(WS)
 
 demo: build
 	@bash scripts/demo.sh $(WS)

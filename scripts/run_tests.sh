@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Runs every registered test of the package (gtest without a master, rostest with its own master) in the
+# catkin workspace, prints the failures and catkin_test_results' summary, and ends with the plain line
+# "N passed, N failed". Exits non-zero when a test failed, errored or did not produce a result.
+set -uo pipefail
+ws=${1:?usage: run_tests.sh CATKIN_WORKSPACE}
+root=$(cd "$(dirname "$0")/.." && pwd)
+log=$root/build/run_tests.log
+export PATH=/usr/bin:/bin:$PATH ROS_HOME=$root/build/ros_home ROS_LOG_DIR=$root/build/ros_home/log
+cd "$ws"
+# shellcheck disable=SC1091
+source devel/setup.bash
+rm -rf build/test_results
+catkin_make run_tests -j1 -DPYTHON_EXECUTABLE=/usr/bin/python3 > "$log" 2>&1
+run_rc=$?
+
+# gtest's own lines for anything that failed, so the reason is on screen, not only in the log.
+grep -E "^\[  FAILED  \]|Failure$|^/.*:[0-9]+: Failure|FAILURE|\[ROSTEST\]|Error" "$log" | sort -u | head -n 60
+
+summary=$(catkin_test_results build/test_results 2>&1)
+results_rc=$?
+echo "$summary" | grep -vE "^Skipping" | tail -n 30
+line=$(echo "$summary" | grep -E "^Summary:" | tail -n 1)
+tests=$(echo "$line" | sed -E 's/.* ([0-9]+) tests.*/\1/')
+errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors.*/\1/')
+failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures.*/\1/')
+if [ -z "$line" ] || [ "$tests" = "0" ]; then
+  echo "no test results found (see $log)"
+  echo "0 passed, 1 failed"
+  exit 1
+fi
+failed=$((errors + failures))
+if [ $run_rc -ne 0 ] && [ $failed -eq 0 ]; then
+  echo "catkin_make run_tests failed without a failing test result (a test did not build or run; see $log)"
+  failed=1
+fi
+echo "$((tests - errors - failures)) passed, $failed failed"
+[ $failed -eq 0 ] && [ $results_rc -eq 0 ]
