@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
+#include "openable/preprocessor.h"
 
 namespace openable
 {
@@ -56,21 +57,43 @@ int scaledNumDisparities(const Config& config, int width)
   return std::max(16, static_cast<int>(std::lround(scaled / 16.0)) * 16);
 }
 
+int stereoWorkWidth(const Config& config, int input_width)
+{
+  const int described_width = Preprocessor(config).cellsAcross() * config.patch_size;
+  return std::min(input_width, std::max(kMinStereoWorkWidth, kStereoPixelsPerPatchPixel * described_width));
+}
+
 cv::Mat disparityFromPair(const cv::Mat& left, const cv::Mat& right, const Config& config)
 {
   checkStereoPair(left, right);
   if (config.stereo_block_size < 1 || config.stereo_block_size % 2 == 0)
     throw Error("stereo_block_size " + std::to_string(config.stereo_block_size) + " is not allowed; expected odd");
+  const int width = stereoWorkWidth(config, left.cols);
+  const int height = std::max(1, static_cast<int>(std::lround(double(left.rows) * width / left.cols)));
   const int block = config.stereo_block_size;
-  const int range = scaledNumDisparities(config, left.cols);
-  if (range >= left.cols)
+  const int range = scaledNumDisparities(config, width);
+  if (range >= width)
     throw Error("stereo pair of " + describe(left) + " is too narrow for a disparity range of " +
                 std::to_string(range) + " px; lower stereo_num_disparities");
+  cv::Mat left_work = toGrey(left), right_work = toGrey(right);
+  if (width != left.cols)
+  {
+    cv::resize(left_work, left_work, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+    cv::resize(right_work, right_work, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  }
   auto sgbm = cv::StereoSGBM::create(0, range, block, 8 * block * block, 32 * block * block, 1, 0, 10, 100, 2,
                                      cv::StereoSGBM::MODE_SGBM);
   cv::Mat fixed;
-  sgbm->compute(toGrey(left), toGrey(right), fixed);
-  return disparityFromImage(fixed);
+  sgbm->compute(left_work, right_work, fixed);
+  cv::Mat disparity = disparityFromImage(fixed);
+  if (width == left.cols)
+    return disparity;
+  // Back to the input's size and pixels. Nearest neighbour keeps NaN (invalid) pixels NaN instead of
+  // blending them into their neighbours.
+  cv::Mat full;
+  cv::resize(disparity, full, left.size(), 0, 0, cv::INTER_NEAREST);
+  full *= double(left.cols) / width;
+  return full;
 }
 
 cv::Mat disparityFromImage(const cv::Mat& disparity)
