@@ -398,6 +398,21 @@ TEST(OwnPatterns, AreFixed)
   EXPECT_NEAR(surf[3], 0.0042913, 1e-6);
 }
 
+// The OpenCV descriptors see the patch through one 8-bit rule, a per-patch min-max stretch: an affine change
+// of the intensities (gain 0.5, offset -40, e.g. the scale of Eq. 6 values is arbitrary) gives the same 8-bit
+// image and so exactly the same descriptor.
+TEST(EightBitRule, AffineIntensityChangeGivesTheSameOpenCvDescriptor)
+{
+  const Patch patch = patchOf(gardensPoint("day_left", 33));
+  Patch changed;
+  patch.intensity.convertTo(changed.intensity, CV_32F, 0.5, -40.0);
+  for (const std::string name : {"ORB", "BRISK", "SIFT", "HOG"})
+  {
+    const auto extractor = createDescriptorExtractor(configFor(name));
+    EXPECT_EQ(describe(*extractor, patch).distance(describe(*extractor, changed)), 0.0) << name;
+  }
+}
+
 // The illumination-invariant image (Eq. 6) has values around 0, often negative: every descriptor describes it
 // (the OpenCV ones through the min-max stretch to 8 bits) and still tells places apart.
 TEST_P(EveryDescriptor, DescribesIlluminationInvariantPatches)
