@@ -8,6 +8,7 @@
 
 #include "openable/descriptors.h"
 #include "openable/error.h"
+#include "openable/frame_describer.h"
 #include "openable/ldb.h"
 #include "openable/preprocessor.h"
 #include "openable/stereo.h"
@@ -478,6 +479,30 @@ TEST(Dldb, IsLdbOfIntensityThenLdbOfValidDisparityBitPacked)
   nearer.disparity = patch.disparity.clone();
   nearer.disparity(cv::Rect(0, 0, 32, 64)) += 20.0f;
   EXPECT_GT(d.distance(describe(*extractor, nearer)), 0.0);
+}
+
+// Grid mode: every cell gets its own intensity and disparity LDB, through the FrameDescriber as the tools use it.
+TEST(Dldb, DescribesEveryCellOfAGrid)
+{
+  Config config = configFor("D-LDB", 32);
+  config.description_type = "grid";
+  config.grid_x = 3;
+  config.grid_y = 2;
+  const FrameDescriber describer(config);
+  ASSERT_EQ(describer.layout().cells, 6);
+  ASSERT_EQ(describer.layout().cell_words, 44);
+  cv::Mat left, right;
+  openable_test::eurocRectifiedPair(0, &left, &right);
+  const auto patches = describer.preprocessor().patchesWithDisparity(left, disparityFromPair(left, right, config));
+  const FrameDescriptor a = describer.describe(patches);
+  EXPECT_EQ(a, describer.describe(patches));
+  for (int cell = 0; cell < 6; ++cell)  // the disparity half of every cell holds bits
+  {
+    int disparity_bits = 0;
+    for (int i = kLdbBits; i < 2 * kLdbBits; ++i)
+      disparity_bits += (a[cell * 44 + (i >> 6)] >> (i & 63)) & 1u;
+    EXPECT_GT(disparity_bits, 0) << "cell " << cell;
+  }
 }
 
 TEST(Dldb, RejectsPatchesWithoutDisparity)
