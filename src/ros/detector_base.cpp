@@ -159,7 +159,7 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   updater_->setHardwareID(getName());
   updater_->add("loop closure detector", this, &DetectorBase::diagnose);
   last_diagnostic_time_ = ros::WallTime::now();
-  diagnostics_timer_ = nh.createTimer(ros::Duration(0.5), [this](const ros::TimerEvent&) { updater_->update(); });
+  diagnostics_timer_ = nh.createTimer(ros::Duration(0.1), [this](const ros::TimerEvent&) { updater_->update(); });
 
   ready_ = true;
   NODELET_INFO_STREAM("openable " << config_.camera_type << " detector ready: " << config_.descriptor << ", patch "
