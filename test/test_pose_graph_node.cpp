@@ -77,7 +77,7 @@ protected:
     loop_pub_ = nh_.advertise<openable_ros::LoopClosure>("loop_closures", 200);
     path_sub_ = nh_.subscribe<nav_msgs::Path>("path", 10, [this](const nav_msgs::Path::ConstPtr& m) { path_ = m; });
     marker_sub_ = nh_.subscribe<visualization_msgs::MarkerArray>(
-        "loop_markers", 10, [this](const visualization_msgs::MarkerArray::ConstPtr& m) { markers_ = m; });
+        "loop_edges", 10, [this](const visualization_msgs::MarkerArray::ConstPtr& m) { markers_ = m; });
   }
 
   bool waitFor(const std::function<bool()>& done, double seconds)

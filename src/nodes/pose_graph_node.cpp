@@ -13,11 +13,12 @@
 //      instead of bending the map;
 //   5. new loops are optimised in batches (a wall-clock timer, ~optimise_period) so that a slow optimisation
 //      never makes the odometry queue overflow; the corrected keyframe path is published (`path`, in
-//      ~map_frame), loop edges as markers (`loop_markers`), and the map -> odom tf that makes
-//      map -> base equal to the corrected pose.
+//      ~map_frame), the uncorrected one (`odom_path`, in the odometry frame) for comparison, loop edges as
+//      markers (`loop_edges`), and the map -> odom tf that makes map -> base equal to the corrected pose.
 //
 // Subscribed: odom (nav_msgs/Odometry), loop_closures (openable_ros/LoopClosure)
-// Published:  path (nav_msgs/Path, latched), loop_markers (visualization_msgs/MarkerArray, latched),
+// Published:  path (nav_msgs/Path, latched), odom_path (nav_msgs/Path, latched),
+//             loop_edges (visualization_msgs/MarkerArray, latched; green trusted, red down-weighted),
 //             tf map -> odom
 // Parameters (all private):
 //   ~map_frame (string, "map")
@@ -128,7 +129,9 @@ public:
   {
     readParameters(pnh);
     path_pub_ = nh.advertise<nav_msgs::Path>("path", 1, true);
-    marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_markers", 1, true);
+    odom_path_pub_ = nh.advertise<nav_msgs::Path>("odom_path", 1, true);
+    // Not "loop_markers": that is the detector's topic, and both usually share a namespace.
+    marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_edges", 1, true);
     // Deep odometry queue: an optimisation may hold the (single) callback thread for a fraction of a second.
     odom_sub_ = nh.subscribe("odom", 1000, &PoseGraphNode::odometryCallback, this);
     loop_sub_ = nh.subscribe("loop_closures", 100, &PoseGraphNode::loopCallback, this);
@@ -501,6 +504,19 @@ private:
       path.poses[i].pose = toPose(graph_.pose(i));
     }
     path_pub_.publish(path);
+    if (odom_path_pub_.getNumSubscribers() == 0)
+      return;
+    nav_msgs::Path odom_path;
+    odom_path.header.stamp = stamp;
+    odom_path.header.frame_id = odom_frame_;
+    odom_path.poses.resize(keyframes_.size());
+    for (size_t i = 0; i < keyframes_.size(); ++i)
+    {
+      odom_path.poses[i].header.stamp = keyframes_[i].stamp;
+      odom_path.poses[i].header.frame_id = odom_frame_;
+      odom_path.poses[i].pose = toPose(keyframes_[i].odom_pose);
+    }
+    odom_path_pub_.publish(odom_path);
   }
 
   void publishMarkers(const std::vector<double>& weights)
@@ -593,6 +609,7 @@ private:
   ros::Subscriber odom_sub_;
   ros::Subscriber loop_sub_;
   ros::Publisher path_pub_;
+  ros::Publisher odom_path_pub_;
   ros::Publisher marker_pub_;
   ros::WallTimer optimise_timer_;
   tf2_ros::Buffer tf_buffer_;
