@@ -40,7 +40,11 @@ std::vector<Eigen::Isometry3d> loadPoses(const std::string& path)
     {
       // KITTI rotations have 7 digits: re-orthonormalise so quaternions are exact.
       p.linear() = Eigen::Quaterniond(p.rotation()).normalized().toRotationMatrix();
-      poses.push_back(p);
+      // As kitti_to_bag publishes them: odom is a ROS body frame (x forward, y left, z up) at the first
+      // camera pose, the child is the optical camera frame (so rviz's top view shows the trajectory).
+      Eigen::Isometry3d odom_T_cam0 = Eigen::Isometry3d::Identity();
+      odom_T_cam0.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+      poses.push_back(odom_T_cam0 * p);
     }
   }
   return poses;

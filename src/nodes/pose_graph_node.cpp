@@ -34,6 +34,7 @@
 //   ~max_interpolation_gap (double, 0.5 s): larger gaps between odometry samples are not interpolated
 //   ~optimise_period (double, 0.5 s): how often new loops are optimised (wall clock, works with a paused bag)
 //   ~publish_tf (bool, true)
+//   ~marker_width (double, 0.3 m): line width of loop_edges
 
 #include <algorithm>
 #include <cmath>
@@ -182,6 +183,7 @@ private:
     positive(pnh, "unverified_sigma_translation", unverified_sigma_translation_, 3.0);
     positive(pnh, "max_interpolation_gap", max_interpolation_gap_, 0.5);
     positive(pnh, "optimise_period", optimise_period_, 0.5);
+    positive(pnh, "marker_width", marker_width_, 0.3);
     pnh.param("use_unverified", use_unverified_, false);
     pnh.param("publish_tf", publish_tf_, true);
     int history = 100000;
@@ -530,7 +532,7 @@ private:
     lines.type = visualization_msgs::Marker::LINE_LIST;
     lines.action = visualization_msgs::Marker::ADD;
     lines.pose.orientation.w = 1.0;
-    lines.scale.x = 0.3;
+    lines.scale.x = marker_width_;
     for (size_t i = 0; i < loops_.size(); ++i)
     {
       // Green: trusted loop; red: down-weighted by the robust loss (treated as wrong).
@@ -589,6 +591,7 @@ private:
   double unverified_sigma_translation_ = 3.0;
   double max_interpolation_gap_ = 0.5;
   double optimise_period_ = 0.5;
+  double marker_width_ = 0.3;
   bool use_unverified_ = false;
   bool publish_tf_ = true;
   size_t odometry_history_ = 100000;
