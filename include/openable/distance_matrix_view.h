@@ -105,7 +105,7 @@ public:
   cv::Mat cells() const;
   /// The picture as 8-bit BGR, integer-upscaled (nearest neighbour) to at most size() pixels square.
   /// Distances through the colour map, excluded cells dark blue-grey, unknown cells black, loops as
-  /// magenta rings. Empty before the first row. Throws Error for a bad colour map.
+  /// white-and-black rings. Empty before the first row. Throws Error for a bad colour map.
   cv::Mat render(const RenderOptions& options) const;
 
 private:

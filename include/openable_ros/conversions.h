@@ -5,9 +5,11 @@
 
 #include <geometry_msgs/Pose.h>
 #include <opencv2/core.hpp>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <std_msgs/Header.h>
 
+#include "openable/geometric_verifier.h"
 #include "openable/loop_detector.h"
 #include "openable/place_database.h"
 #include "openable_ros/LoopClosure.h"
@@ -26,6 +28,10 @@ bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::str
 
 /// A stereo_msgs/DisparityImage's image (32FC1) as CV_32F, shared with the message. Never throws.
 bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, std::string& error);
+
+/// A rectified camera from CameraInfo.P (and, for a stereo pair, the right camera's P: baseline).
+openable::PinholeCamera toPinholeCamera(const sensor_msgs::CameraInfo& left,
+                                        const sensor_msgs::CameraInfo* right = nullptr);
 
 geometry_msgs::Pose toPoseMsg(const std::array<double, 7>& pose);
 

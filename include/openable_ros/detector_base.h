@@ -23,8 +23,10 @@
 #include "openable/config.h"
 #include "openable/distance_matrix_view.h"
 #include "openable/frame_describer.h"
+#include "openable/geometric_verifier.h"
 #include "openable/loop_detector.h"
 #include "openable_ros/DetectorConfig.h"
+#include "openable_ros/LoopClosure.h"
 #include "openable_ros/LoadMap.h"
 #include "openable_ros/SaveMap.h"
 
@@ -54,10 +56,28 @@ protected:
   /// Turns the preprocessed input into a descriptor; throws openable::Error / cv::Exception on bad input.
   using DescribeFunction = std::function<openable::FrameDescriptor(const openable::FrameDescriber&)>;
 
+  /// The rectified images geometric verification (~verify) extracts features from: left (or mono) and,
+  /// for a stereo camera, right. Empty images: the frame has no features (its loops are not verified).
+  struct VerifyImages
+  {
+    cv::Mat left;
+    cv::Mat right;
+  };
+
   /// One synchronised input set: checks the stamp (time jumps), decides whether it is a keyframe (tf),
   /// describes it (timed), matches it, publishes loop closures, updates the distance matrix and markers.
   /// `topic` names the input in warnings and in the stored frame's source. Never throws.
-  void processFrame(const std_msgs::Header& header, const std::string& topic, const DescribeFunction& describe);
+  void processFrame(const std_msgs::Header& header, const std::string& topic, const DescribeFunction& describe,
+                    const VerifyImages& verify_images = VerifyImages());
+
+  /// With ~verify: builds the geometric verifier from the first valid camera (from camera_info). Later
+  /// calls with the same camera do nothing; another camera is refused with a warning.
+  void setCamera(const openable::PinholeCamera& camera);
+  /// True when ~verify is on (the nodelet then subscribes camera_info and passes VerifyImages).
+  bool verifyEnabled() const
+  {
+    return verify_;
+  }
 
   /// Counts a rejected input under `reason` (shown in diagnostics) and warns, throttled per reason.
   void rejectFrame(const std::string& reason, const std::string& message);
@@ -106,13 +126,16 @@ private:
     }
   };
 
+  /// Geometric verification of an accepted loop: fills the relative pose, or returns false when the
+  /// loop must not be published (verification failed and ~verify_required).
+  bool verifyLoopLocked(const openable::Detection& detection, const openable::FrameFeatures* query, LoopClosure& msg);
   bool loadMapLocked(const std::string& path, std::string& message);
   bool checkTimeLocked(const std_msgs::Header& header, const std::string& topic);
   /// Camera pose in ~fixed_frame at the header's stamp; false (with a throttled warning) without tf.
   bool lookupPoseLocked(const std_msgs::Header& header, std::array<double, 7>& pose);
   bool isKeyframeLocked(bool has_pose, const std::array<double, 7>& pose);
   void publishLoopLocked(const std_msgs::Header& header, const openable::Detection& detection,
-                         const openable::FrameInfo& query);
+                         const openable::FrameInfo& query, const openable::FrameFeatures* features);
   void publishMatrixLocked(const std_msgs::Header& header);
   void publishMarkersLocked(const std_msgs::Header& header, bool force);
   void resetStreamLocked();
@@ -142,6 +165,13 @@ private:
   int queue_size_ = 10;
   double sync_warning_timeout_ = 5.0;
   uint32_t session_ = 0;
+  bool verify_ = false;
+  bool verify_required_ = true;
+
+  // Geometric verification (~verify).
+  std::unique_ptr<openable::GeometricVerifier> verifier_;
+  openable::FeatureStore features_;
+  std::map<std::string, uint64_t> verification_results_;
 
   // Outputs and services.
   ros::Publisher loop_pub_;

@@ -16,10 +16,12 @@ namespace
 {
 const float kUnknown = std::numeric_limits<float>::quiet_NaN();
 // Colours of the picture (BGR). Excluded cells are a muted blue-grey that none of the 12 colour maps
-// produces at its ends, unknown cells are black, loops magenta: visible on every colour map.
+// produces at its ends, unknown cells are black. Loops are a white ring inside a black one: one of the
+// two stands out on every colour map (a single colour vanishes in the maps that contain it).
 const cv::Vec3b kExcludedColor(90, 60, 50);
 const cv::Vec3b kUnknownColor(0, 0, 0);
-const cv::Scalar kLoopColor(255, 0, 255);
+const cv::Scalar kLoopInnerColor(255, 255, 255);
+const cv::Scalar kLoopOuterColor(0, 0, 0);
 
 void checkSize(int size)
 {
@@ -401,7 +403,8 @@ cv::Mat DistanceMatrixView::render(const RenderOptions& options) const
         continue;
       }
       const cv::Point centre(int(column) * factor + factor / 2, row * factor + factor / 2);
-      cv::circle(image, centre, radius, kLoopColor, 1, cv::LINE_8);
+      cv::circle(image, centre, radius + 1, kLoopOuterColor, 1, cv::LINE_8);
+      cv::circle(image, centre, radius, kLoopInnerColor, 1, cv::LINE_8);
     }
   }
   return image;

@@ -24,6 +24,12 @@ private:
     image_sub_ = input_transport_->subscribe("image", uint32_t(queueSize()), &MonoDetector::imageCallback, this,
                                              image_transport::TransportHints("raw", ros::TransportHints(),
                                                                              getPrivateNodeHandle()));
+    if (verifyEnabled())
+    {
+      // Geometric verification needs the intrinsics (rectified image: P).
+      info_sub_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>(
+          "camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) { setCamera(toPinholeCamera(*msg)); });
+    }
   }
 
   void imageCallback(const sensor_msgs::ImageConstPtr& msg)
@@ -37,11 +43,12 @@ private:
     }
     processFrame(msg->header, image_sub_.getTopic(), [&image](const openable::FrameDescriber& describer) {
       return describer.describeImage(image);
-    });
+    }, VerifyImages{ image, cv::Mat() });
   }
 
   std::unique_ptr<image_transport::ImageTransport> input_transport_;
   image_transport::Subscriber image_sub_;
+  ros::Subscriber info_sub_;
 };
 
 }  // namespace openable_ros

@@ -37,6 +37,7 @@ private:
     std::vector<std::string> warnings;
     const bool approximate = readBool(pnh, "approximate_sync", false, warnings);
     const bool use_disparity = readBool(pnh, "use_disparity", false, warnings);
+    use_disparity_ = use_disparity;
     for (const auto& warning : warnings)
     {
       NODELET_WARN_STREAM("parameter " << warning);
@@ -56,7 +57,10 @@ private:
         [this](const sensor_msgs::ImageConstPtr&) { noteInput(0); }));
     // camera_info is optional: when it comes, it is checked against the images (calibrated, same size).
     left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-        "left/camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) { left_info_ = msg; });
+        "left/camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) {
+          left_info_ = msg;
+          updateCamera();
+        });
 
     const std::string advice = approximate ? "Raise ~queue_size if the stamps are far apart." :
                                              "If the stamps are not identical, set ~approximate_sync true.";
@@ -84,7 +88,10 @@ private:
     right_sub_.registerCallback(boost::function<void(const sensor_msgs::ImageConstPtr&)>(
         [this](const sensor_msgs::ImageConstPtr&) { noteInput(1); }));
     right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-        "right/camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) { right_info_ = msg; });
+        "right/camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) {
+          right_info_ = msg;
+          updateCamera();
+        });
     if (approximate)
     {
       approximate_pair_ = std::make_unique<message_filters::Synchronizer<ApproximatePair>>(ApproximatePair(queue),
@@ -98,6 +105,17 @@ private:
       exact_pair_->registerCallback(&StereoDetector::pairCallback, this);
     }
     startSyncWatchdog({ left_sub_.getTopic(), right_sub_.getTopic() }, advice);
+  }
+
+  /// With ~verify: the verifier's camera from the pair's projections (the baseline from the right P), or
+  /// from the left one alone in disparity mode.
+  void updateCamera()
+  {
+    if (!verifyEnabled() || !left_info_ || (!use_disparity_ && !right_info_))
+    {
+      return;
+    }
+    setCamera(toPinholeCamera(*left_info_, use_disparity_ ? nullptr : right_info_.get()));
   }
 
   /// False (with the frame rejected) when a received camera_info says the image cannot be used.
@@ -165,7 +183,8 @@ private:
                    }
                    const cv::Mat disparity = openable::disparityFromPair(left, right, config());
                    return describer.describe(describer.preprocessor().patchesWithDisparity(left, disparity));
-                 });
+                 },
+                 VerifyImages{ left, right });
   }
 
   void disparityCallback(const sensor_msgs::ImageConstPtr& left_msg,
@@ -200,9 +219,10 @@ private:
     processFrame(left_msg->header, left_sub_.getTopic(), [&left, &raw](const openable::FrameDescriber& describer) {
       return describer.describe(
           describer.preprocessor().patchesWithDisparity(left, openable::disparityFromImage(raw)));
-    });
+    }, VerifyImages{ left, cv::Mat() });
   }
 
+  bool use_disparity_ = false;
   std::unique_ptr<image_transport::ImageTransport> input_transport_;
   image_transport::SubscriberFilter left_sub_;
   image_transport::SubscriberFilter right_sub_;

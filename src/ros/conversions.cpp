@@ -92,6 +92,21 @@ bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, std::string&
   return true;
 }
 
+openable::PinholeCamera toPinholeCamera(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo* right)
+{
+  cv::Matx34d p_left;
+  cv::Matx34d p_right = cv::Matx34d::zeros();
+  for (int i = 0; i < 12; ++i)
+  {
+    p_left(i / 4, i % 4) = left.P[size_t(i)];
+    if (right)
+    {
+      p_right(i / 4, i % 4) = right->P[size_t(i)];
+    }
+  }
+  return openable::PinholeCamera::fromProjection(p_left, p_right);
+}
+
 geometry_msgs::Pose toPoseMsg(const std::array<double, 7>& pose)
 {
   geometry_msgs::Pose out;

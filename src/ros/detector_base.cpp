@@ -9,6 +9,7 @@
 #include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <sensor_msgs/image_encodings.h>
+#include <tf2/LinearMath/Matrix3x3.h>
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2/exceptions.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -79,7 +80,12 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   sync_warning_timeout_ = readDouble(pnh, "sync_warning_timeout", 5.0, 0.0, 3600.0, "s", warnings);
   session_ = uint32_t(readInt(pnh, "session", 0, 0, 1000000000, warnings));
   const int matrix_size = readInt(pnh, "matrix_size", 512, 16, 4096, warnings);
+  verify_ = readBool(pnh, "verify", false, warnings);
+  verify_required_ = readBool(pnh, "verify_required", true, warnings);
+  const double verify_memory = readDouble(pnh, "verify_memory", 256.0, 1.0, 65536.0, "MB", warnings);
+  features_ = openable::FeatureStore(size_t(verify_memory * 1024.0 * 1024.0));
   std::string matrix_mode = readString(pnh, "matrix_mode", "whole_history", warnings);
+  const bool matrix_threshold_view = readBool(pnh, "matrix_threshold_view", false, warnings);
   if (matrix_mode != "whole_history" && matrix_mode != "rolling_window")
   {
     warnings.push_back("~matrix_mode: value '" + matrix_mode +
@@ -179,6 +185,7 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   pnh.setParam("matrix_rate", matrix_rate_);
   pnh.setParam("matrix_size", matrix_size);
   pnh.setParam("matrix_mode", matrix_mode);
+  pnh.setParam("matrix_threshold_view", matrix_threshold_view);
   lock.unlock();
 
   // The server reads its start values from the same private parameters (clamped to the .cfg ranges) and
@@ -359,8 +366,109 @@ bool DetectorBase::isKeyframeLocked(bool has_pose, const std::array<double, 7>& 
   return moved;
 }
 
+void DetectorBase::setCamera(const openable::PinholeCamera& camera)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!verify_ || !ready_)
+  {
+    return;
+  }
+  if (verifier_)
+  {
+    const openable::PinholeCamera& c = verifier_->camera();
+    if (c.fx != camera.fx || c.fy != camera.fy || c.cx != camera.cx || c.cy != camera.cy ||
+        c.baseline != camera.baseline)
+    {
+      warnThrottled("camera changed", 60.0,
+                    "camera_info changed after the verifier was built; keeping the first calibration");
+    }
+    return;
+  }
+  try
+  {
+    verifier_ = std::make_unique<openable::GeometricVerifier>(camera);
+    NODELET_INFO_STREAM("geometric verification on: fx " << camera.fx << ", baseline " << camera.baseline
+                                                         << " m (" << (camera.stereo() ? "stereo PnP" : "mono essential")
+                                                         << ")");
+  }
+  catch (const openable::Error& e)
+  {
+    warnThrottled("camera", 10.0, std::string("~verify: camera_info cannot be used: ") + e.what());
+  }
+}
+
+bool DetectorBase::verifyLoopLocked(const openable::Detection& detection, const openable::FrameFeatures* query,
+                                    LoopClosure& msg)
+{
+  if (!verify_)
+  {
+    return true;
+  }
+  std::string outcome;
+  if (!verifier_)
+  {
+    outcome = "no camera_info yet";
+  }
+  else if (!query)
+  {
+    outcome = "no query features";
+  }
+  else
+  {
+    const openable::FrameFeatures* match = features_.find(detection.best.id);
+    if (!match)
+    {
+      outcome = "match frame has no features (map or evicted)";
+    }
+    else
+    {
+      const openable::Verification v = verifier_->verify(*match, *query);
+      outcome = openable::toString(v.status);
+      if (v.accepted())
+      {
+        msg.has_relative_pose = true;
+        msg.relative_pose.pose.position.x = v.translation[0];
+        msg.relative_pose.pose.position.y = v.translation[1];
+        msg.relative_pose.pose.position.z = v.translation[2];
+        tf2::Matrix3x3 rotation(v.rotation(0, 0), v.rotation(0, 1), v.rotation(0, 2), v.rotation(1, 0),
+                                v.rotation(1, 1), v.rotation(1, 2), v.rotation(2, 0), v.rotation(2, 1),
+                                v.rotation(2, 2));
+        tf2::Quaternion q;
+        rotation.getRotation(q);
+        msg.relative_pose.pose.orientation.x = q.x();
+        msg.relative_pose.pose.orientation.y = q.y();
+        msg.relative_pose.pose.orientation.z = q.z();
+        msg.relative_pose.pose.orientation.w = q.w();
+        for (int r = 0; r < 6; ++r)
+        {
+          for (int c = 0; c < 6; ++c)
+          {
+            msg.relative_pose.covariance[size_t(r * 6 + c)] = v.covariance(r, c);
+          }
+        }
+        ++verification_results_["accepted"];
+        return true;
+      }
+      outcome += v.reason.empty() ? "" : " (" + v.reason + ")";
+      ++verification_results_[openable::toString(v.status)];
+      if (verify_required_)
+      {
+        warnThrottled("verification", kWarnPeriod,
+                      "loop closure " + std::to_string(detection.query_id) + " -> " +
+                          std::to_string(detection.best.id) + " not published: geometric verification " + outcome);
+        return false;
+      }
+      return true;
+    }
+  }
+  // Verification could not run: the loop goes out unverified (has_relative_pose false).
+  ++verification_results_[outcome];
+  warnThrottled("verification unavailable", 30.0, "~verify: loop closure published unverified: " + outcome);
+  return true;
+}
+
 void DetectorBase::processFrame(const std_msgs::Header& header, const std::string& topic,
-                                const DescribeFunction& describe)
+                                const DescribeFunction& describe, const VerifyImages& verify_images)
 {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!ready_)
@@ -411,6 +519,24 @@ void DetectorBase::processFrame(const std_msgs::Header& header, const std::strin
   {
     ++frames_stored_;
   }
+  // Features of this frame for verifying its loops (and, stored, the loops of later frames to it).
+  std::unique_ptr<openable::FrameFeatures> features;
+  if (verifier_ && !verify_images.left.empty())
+  {
+    try
+    {
+      features = std::make_unique<openable::FrameFeatures>(
+          verifier_->extract(verify_images.left, verify_images.right, detection.query_id));
+    }
+    catch (const openable::Error& e)
+    {
+      warnThrottled("features", kWarnPeriod, "'" + topic + "': no features for verification: " + e.what());
+    }
+    catch (const cv::Exception& e)
+    {
+      warnThrottled("features", kWarnPeriod, "'" + topic + "': no features for verification (OpenCV): " + e.what());
+    }
+  }
   if (info.has_pose)
   {
     trajectory_.push_back(position(info.pose));
@@ -427,16 +553,19 @@ void DetectorBase::processFrame(const std_msgs::Header& header, const std::strin
   }
   if (detection.accepted)
   {
-    publishLoopLocked(header, detection, info);
+    publishLoopLocked(header, detection, info, features.get());
+  }
+  if (features && !detector_->localisationMode())
+  {
+    features_.insert(std::move(*features));
   }
   publishMatrixLocked(header);
   publishMarkersLocked(header, detection.accepted);
 }
 
 void DetectorBase::publishLoopLocked(const std_msgs::Header& header, const openable::Detection& detection,
-                                     const openable::FrameInfo& query)
+                                     const openable::FrameInfo& query, const openable::FrameFeatures* features)
 {
-  ++loops_accepted_;
   // Positions shift when the history evicts its oldest frames while storing the query: find the match
   // by id. An evicted match still gives a message, without its stamp and pose.
   const openable::PlaceDatabase& database = detector_->database();
@@ -446,6 +575,11 @@ void DetectorBase::publishLoopLocked(const std_msgs::Header& header, const opena
     match = &database.info(size_t(detection.best.id - database.firstId()));
   }
   LoopClosurePtr msg = makeLoopClosure(header, detection, query, match);
+  if (!verifyLoopLocked(detection, features, *msg))
+  {
+    return;
+  }
+  ++loops_accepted_;
   if (matrix_rate_ > 0.0)
   {
     view_.addLoop(detection.best.id);
@@ -477,6 +611,8 @@ void DetectorBase::publishMatrixLocked(const std_msgs::Header& header)
   }
   openable::DistanceMatrixView::RenderOptions options;
   options.color_map = config_.color_map;
+  // display_normalization: minmax stretches the shown distances over the colour map, max is paper Eq. 5.
+  options.stretch = config_.display_normalization != "max";
   if (matrix_threshold_view_)
   {
     options.threshold = std::max(0.0, config_.threshold);
@@ -574,6 +710,7 @@ void DetectorBase::resetStreamLocked()
   view_.clear();
   trajectory_.clear();
   loop_edges_.clear();
+  features_.clear();
   has_keyframe_pose_ = false;
   last_stamp_ = ros::Time();
 }
@@ -642,6 +779,7 @@ bool DetectorBase::loadMapLocked(const std::string& path, std::string& message)
     message = "map '" + path + "' refused: " + e.what();
     return false;
   }
+  features_.clear();
   view_.clear();
   trajectory_.clear();
   loop_edges_.clear();
@@ -834,6 +972,15 @@ void DetectorBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
   status.add("match latency mean (ms)", match_latency_.mean());
   status.add("loop closures", loops_accepted_);
   status.add("distance_matrix images published", matrix_published_);
+  if (verify_)
+  {
+    status.add("verification", verifier_ ? "on" : "waiting for camera_info");
+    status.add("verification features bytes", features_.bytes());
+    for (const auto& r : verification_results_)
+    {
+      status.add("verification: " + r.first, r.second);
+    }
+  }
 }
 
 }  // namespace openable_ros
