@@ -40,10 +40,14 @@ cv::Mat normalizeMinMax(const cv::Mat& distances)
       }
   }
   cv::Mat out = distances.clone();
-  if (high > low)
-    out = (out - low) / (high - low);
-  else if (std::isfinite(low))
-    out.setTo(0.0f, out == out);  // all equal: zero, NaN kept (NaN != NaN)
+  const float range = high > low ? high - low : 1.0f;  // all equal: every finite cell becomes 0
+  for (int y = 0; y < out.rows; ++y)
+  {
+    float* row = out.ptr<float>(y);
+    for (int x = 0; x < out.cols; ++x)
+      if (std::isfinite(row[x]))
+        row[x] = (row[x] - low) / range;
+  }
   return out;
 }
 
