@@ -1,5 +1,5 @@
 # Two commands a newcomer needs: `make demo` and `make test`. Both install what they need first.
-# The catkin workspace lives in build/ws, with this repository linked in as build/ws/src/openable_ros.
+# The catkin workspace lives in build/ws; build/ws/src/openable_ros links to this repository's files.
 SHELL := /bin/bash
 WS := $(CURDIR)/build/ws
 JOBS ?= $(shell nproc)
@@ -17,7 +17,7 @@ deps:
 
 workspace:
 	@mkdir -p $(WS)/src build/ros_home
-	@[ -L $(WS)/src/openable_ros ] || ln -sfn $(CURDIR) $(WS)/src/openable_ros
+	@bash scripts/link_workspace.sh $(WS)/src/openable_ros
 
 build: deps workspace
 	$(CATKIN_MAKE)
