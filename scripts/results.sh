@@ -13,6 +13,7 @@
 # Sequential on purpose (one run at a time); about 15-25 minutes on a 2-core machine for everything.
 # Prints the Markdown tables on stdout. Needs python3 (standard library only).
 set -euo pipefail
+{ # read whole before running: the script can be edited while it runs
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 out=/tmp/openable_results
 bin=""
@@ -247,8 +248,8 @@ if PLOTS:
     def overlay(file, title, pair, runs, masked=False):
         cmd = [EVALUATE, '--tolerance', str(PAIRS[pair][2]), '--output', os.path.join(OUT, 'plot_' + file),
                '--title', title]
-        for name, sets, config in runs:
-            cmd += ['--matrix', run(pair, sets, config)['dir'], '--name', name]
+        for name, sets, config, *of in runs:  # optional 4th item: the pair of that run (same T and size)
+            cmd += ['--matrix', run(of[0] if of else pair, sets, config)['dir'], '--name', name]
         if masked:
             cmd += ['--mask-dark', PAIRS[pair][1]]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
@@ -260,9 +261,11 @@ if PLOTS:
                        ('day_left -> day_right', 'pr_day_left_day_right_L20')):
         overlay(file, pair + ', every descriptor, L = 20, T = 2', pair,
                 [(d, gardens_sets(d, 20, False), DEFAULT) for d in DESCRIPTORS])
-    overlay('pr_day_right_night_right_hog_L', 'day_right -> night_right, HOG patch 64, T = 2', 'day_right -> night_right',
-            [(f'L = {L}', dict(descriptor='HOG', patch_size=64, patch_normalization=0, sequence_length=L), DEFAULT)
+    overlay('pr_day_right_night_right_hog_L', 'day_right -> night_right, HOG patch 128, T = 2', 'day_right -> night_right',
+            [(f'L = {L}', dict(descriptor='HOG', patch_size=128, patch_normalization=0, sequence_length=L), DEFAULT)
              for L in (1, 10, 20, 30)])
+    overlay('pr_gardens_point_recommended', 'config/gardens_point.yaml (HOG, patch 128, L = 20), T = 2',
+            'day_right -> night_right', [(p, {}, ROOT + '/config/gardens_point.yaml', p) for p in GARDENS])
     overlay('pr_nordland_L50_masked', 'Nordland summer -> winter, L = 50, T = 1, near-black masked', NORDLAND,
             [(d, nordland_sets(d, 50, False), DEFAULT) for d in DESCRIPTORS], masked=True)
     overlay('pr_nordland_hog_L_masked', 'Nordland summer -> winter, HOG patch 32, T = 1, near-black masked', NORDLAND,
@@ -270,3 +273,5 @@ if PLOTS:
              for L in (1, 20, 50, 100)], masked=True)
     print('PR plots written to doc/images/', file=sys.stderr)
 PYTHON
+exit
+}
