@@ -10,7 +10,8 @@
 #               present there are reused, delete it to start afresh
 #   --plots     also write the PR plots of doc/results.md into doc/images/
 #
-# Sequential on purpose (one run at a time); about 15-25 minutes on a 2-core machine for everything.
+# Sequential on purpose (one run at a time): about 30-45 minutes for everything on a shared 2-core
+# machine (the main tables ~25, --only explore ~15, recommended + plots ~2).
 # Prints the Markdown tables on stdout. Needs python3 (standard library only).
 set -euo pipefail
 { # read whole before running: the script can be edited while it runs
