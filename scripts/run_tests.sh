@@ -2,7 +2,7 @@
 # Runs every registered test of the package (gtest without a master, rostest with its own master) in the
 # catkin workspace, prints the failures and catkin_test_results' summary, and ends with the plain line
 # "N passed, N failed". Exits non-zero when a test failed, errored or did not produce a result.
-set -uo pipefail
+set -o pipefail  # no -u: ROS setup scripts read unset variables
 ws=${1:?usage: run_tests.sh CATKIN_WORKSPACE}
 root=$(cd "$(dirname "$0")/.." && pwd)
 log=$root/build/run_tests.log
