@@ -74,10 +74,29 @@ TEST(PanoramicDetector, ReversedRevisitIsReportedWithDirectionMinusOne)
   ros::NodeHandle pnh("~");
   const std::string dir = pnh.param<std::string>("data_dir", OPENABLE_SOURCE_DIR "/../shared/data/gardens_point");
   const double min_reverse_fraction = pnh.param("min_reverse_fraction", 0.8);
+  // ~ring true: every sub-panorama goes out on its own camera topic (ring/cam0 .. ring/cam5, the
+  // detector's ~cameras), with the same stamp; false: one panoramic image on `image`.
+  const bool ring = pnh.param("ring", false);
   DiagnosticsWatcher diagnostics(nh);
   ros::Publisher pub = nh.advertise<sensor_msgs::Image>("image", 100);
+  std::vector<ros::Publisher> camera_pubs;
+  for (int i = 0; ring && i < kSubPanoramas; ++i)
+  {
+    camera_pubs.push_back(nh.advertise<sensor_msgs::Image>("ring/cam" + std::to_string(i), 100));
+  }
   ros::Subscriber sub = nh.subscribe("loop_closures", 1000, loopCallback);
-  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 30.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        for (const auto& camera_pub : camera_pubs)
+        {
+          if (camera_pub.getNumSubscribers() == 0)
+          {
+            return false;
+          }
+        }
+        return (ring || pub.getNumSubscribers() > 0) && sub.getNumPublishers() > 0;
+      },
+      30.0));
 
   std::vector<cv::Mat> stream;
   for (int place = 0; place < kPlaces; ++place)
@@ -98,7 +117,19 @@ TEST(PanoramicDetector, ReversedRevisitIsReportedWithDirectionMinusOne)
   {
     ASSERT_FALSE(image.empty()) << "cannot read the Gardens Point images under " << dir;
     stamp += ros::Duration(0.1);
-    pub.publish(openable_ros_test::toMsg(image, enc::BGR8, stamp, "panoramic_camera"));
+    if (ring)
+    {
+      const int width = image.cols / kSubPanoramas;
+      for (int i = 0; i < kSubPanoramas; ++i)
+      {
+        const cv::Mat tile = image.colRange(i * width, (i + 1) * width).clone();
+        camera_pubs[size_t(i)].publish(openable_ros_test::toMsg(tile, enc::BGR8, stamp, "cam" + std::to_string(i)));
+      }
+    }
+    else
+    {
+      pub.publish(openable_ros_test::toMsg(image, enc::BGR8, stamp, "panoramic_camera"));
+    }
     rate.sleep();
   }
   ASSERT_TRUE(waitFor([&] { return diagnostics.number("frames received") == long(stream.size()); }, 30.0));
