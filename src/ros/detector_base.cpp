@@ -964,6 +964,10 @@ void DetectorBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
   {
     status.add("rejected: " + r.first, r.second);
   }
+  // What is in force (dynamic_reconfigure may have changed it).
+  status.add("threshold", config_.threshold);
+  status.add("sequence length", config_.sequence_length);
+  status.add("exclusion window", config_.exclusion_window);
   status.add("history size", detector_->database().size());
   status.add("history bytes", detector_->database().bytes());
   status.add("describe latency last (ms)", describe_latency_.last_ms);

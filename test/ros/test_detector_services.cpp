@@ -11,6 +11,7 @@
 #include <openable_ros/LoopClosure.h>
 #include <openable_ros/SaveMap.h>
 #include <ros/ros.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <std_srvs/Trigger.h>
 
 #include "openable/config.h"
@@ -233,6 +234,56 @@ TEST_F(DetectorServices, SaveLoadResetRoundTripAndBadMapsAreRefused)
   std::remove(map_path.c_str());
   std::remove(corrupt_path.c_str());
   std::remove((map_path + ".other").c_str());
+}
+
+TEST_F(DetectorServices, DynamicReconfigureChangesMatchingLiveAndRevertsRefusedValues)
+{
+  ASSERT_TRUE(ros::service::waitForService(detector_ + "/set_parameters", ros::Duration(10.0)));
+  ros::ServiceClient client = nh_.serviceClient<dynamic_reconfigure::Reconfigure>(detector_ + "/set_parameters");
+  auto setDouble = [&](const std::string& name, double value) {
+    dynamic_reconfigure::Reconfigure srv;
+    dynamic_reconfigure::DoubleParameter p;
+    p.name = name;
+    p.value = value;
+    srv.request.config.doubles.push_back(p);
+    EXPECT_TRUE(client.call(srv));
+    return srv.response.config;
+  };
+  auto find = [](const dynamic_reconfigure::Config& config, const std::string& name) {
+    for (const auto& d : config.doubles)
+    {
+      if (d.name == name)
+      {
+        return d.value;
+      }
+    }
+    return -100.0;
+  };
+
+  // A live change reaches the detector.
+  EXPECT_DOUBLE_EQ(find(setDouble("threshold", 0.05), "threshold"), 0.05);
+  EXPECT_TRUE(waitFor([&] { return diagnostics_->value("threshold") == "0.05"; }, 10.0))
+      << "threshold in diagnostics: " << diagnostics_->value("threshold");
+  dynamic_reconfigure::Reconfigure srv;
+  dynamic_reconfigure::IntParameter length;
+  length.name = "sequence_length";
+  length.value = 4;
+  srv.request.config.ints.push_back(length);
+  ASSERT_TRUE(client.call(srv));
+  EXPECT_TRUE(waitFor([&] { return diagnostics_->number("sequence length") == 4; }, 10.0));
+
+  // Inside the .cfg range but refused by the core (a threshold is -1 or in [0, 1]): reverted, and the
+  // server reports the value in force.
+  EXPECT_DOUBLE_EQ(find(setDouble("threshold", -0.5), "threshold"), 0.05);
+  ros::WallDuration(0.5).sleep();
+  EXPECT_EQ(diagnostics_->value("threshold"), "0.05");
+
+  // Back to the test configuration.
+  setDouble("threshold", 0.1);
+  length.value = 3;
+  srv.request.config.ints.assign(1, length);
+  ASSERT_TRUE(client.call(srv));
+  EXPECT_TRUE(waitFor([&] { return diagnostics_->number("sequence length") == 3; }, 10.0));
 }
 
 int main(int argc, char** argv)
