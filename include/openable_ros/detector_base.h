@@ -85,8 +85,9 @@ protected:
   /// nodelets in one manager must not silence each other).
   void warnThrottled(const std::string& key, double period, const std::string& message);
 
-  /// Watches synchronised inputs: warns every ~sync_warning_timeout seconds while no complete set arrived,
-  /// naming each topic with the messages it received (rtabmap's SyncDiagnostic idea). Call noteInput()
+  /// Watches synchronised inputs: warns every ~sync_warning_timeout seconds while messages arrive but no
+  /// complete set does (or nothing ever arrived), naming each topic with the messages it received since the
+  /// last set (rtabmap's SyncDiagnostic idea). A stream that stopped altogether is not warned about. Call noteInput()
   /// from each input's own callback and noteSynchronised() when a set is complete.
   void startSyncWatchdog(const std::vector<std::string>& topics, const std::string& advice);
   void noteInput(size_t index);
@@ -203,6 +204,7 @@ private:
   void checkSync();
   std::vector<std::string> sync_topics_;
   std::vector<uint64_t> sync_counts_;
+  std::vector<uint64_t> sync_counts_at_last_set_;
   std::string sync_advice_;
   uint64_t sync_sets_ = 0;
   ros::WallTime last_sync_time_;

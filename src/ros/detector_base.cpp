@@ -201,6 +201,7 @@ void DetectorBase::startSyncWatchdog(const std::vector<std::string>& topics, con
   std::lock_guard<std::mutex> lock(mutex_);
   sync_topics_ = topics;
   sync_counts_.assign(topics.size(), 0);
+  sync_counts_at_last_set_.assign(topics.size(), 0);
   sync_advice_ = advice;
   last_sync_time_ = ros::WallTime::now();
   if (sync_warning_timeout_ > 0.0)
@@ -224,6 +225,7 @@ void DetectorBase::noteSynchronised()
   std::lock_guard<std::mutex> lock(mutex_);
   ++sync_sets_;
   last_sync_time_ = ros::WallTime::now();
+  sync_counts_at_last_set_ = sync_counts_;
 }
 
 void DetectorBase::checkSync()
@@ -234,16 +236,26 @@ void DetectorBase::checkSync()
   {
     return;
   }
-  std::ostringstream what;
-  what << "no synchronised input set for " << int(quiet) << " s (" << sync_sets_ << " sets so far). Received:";
+  // Messages that arrived since the last complete set: some but no set means they do not pair up; none at
+  // all since the start means nothing is connected. A stream that simply stopped stays silent.
+  uint64_t since = 0;
   uint64_t total = 0;
+  std::ostringstream counts;
   for (size_t i = 0; i < sync_topics_.size(); ++i)
   {
-    what << (i ? "," : "") << " '" << sync_topics_[i] << "' " << sync_counts_[i];
+    const uint64_t n = sync_counts_[i] - sync_counts_at_last_set_[i];
+    counts << (i ? "," : "") << " '" << sync_topics_[i] << "' " << n;
+    since += n;
     total += sync_counts_[i];
   }
-  what << " messages.";
-  if (total > 0)
+  if (since == 0 && total > 0)
+  {
+    return;
+  }
+  std::ostringstream what;
+  what << "no synchronised input set for " << int(quiet) << " s (" << sync_sets_
+       << " sets so far). Received since the last set:" << counts.str() << " messages.";
+  if (since > 0)
   {
     what << " " << sync_advice_;
   }

@@ -5,11 +5,41 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <mutex>
+#include <rosgraph_msgs/Log.h>
 #include <ros/ros.h>
 
 #include "test_helpers.h"
 
 using openable_ros_test::DiagnosticsWatcher;
+
+namespace
+{
+std::mutex log_mutex;
+std::vector<std::string> warnings;
+
+void logCallback(const rosgraph_msgs::LogConstPtr& msg)
+{
+  if (msg->level >= rosgraph_msgs::Log::WARN)
+  {
+    std::lock_guard<std::mutex> lock(log_mutex);
+    warnings.push_back(msg->msg);
+  }
+}
+
+bool warned(const std::string& a, const std::string& b)
+{
+  std::lock_guard<std::mutex> lock(log_mutex);
+  for (const auto& w : warnings)
+  {
+    if (w.find(a) != std::string::npos && w.find(b) != std::string::npos)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+}  // namespace
 using openable_ros_test::waitFor;
 namespace enc = sensor_msgs::image_encodings;
 
@@ -20,6 +50,7 @@ TEST(StereoDetector, EveryExactPairIsOneHistoryEntryAndMismatchedPairsAreRejecte
   const std::string dir =
       pnh.param<std::string>("data_dir", OPENABLE_SOURCE_DIR "/../shared/data/stereo/euroc_v101_micro");
   DiagnosticsWatcher diagnostics(nh);
+  ros::Subscriber log_sub = nh.subscribe("/rosout", 100, logCallback);
   ros::Publisher left_pub = nh.advertise<sensor_msgs::Image>("left/image_rect", 50);
   ros::Publisher right_pub = nh.advertise<sensor_msgs::Image>("right/image_rect", 50);
   ASSERT_TRUE(waitFor([&] { return left_pub.getNumSubscribers() > 0 && right_pub.getNumSubscribers() > 0; }, 30.0))
@@ -82,6 +113,28 @@ TEST(StereoDetector, EveryExactPairIsOneHistoryEntryAndMismatchedPairsAreRejecte
   EXPECT_TRUE(waitFor([&] { return diagnostics.number("history size") == 41; }, 10.0));
   // Pairs were described with D-LDB (disparity from SGBM): the describe latency is reported.
   EXPECT_GT(std::stod(diagnostics.value("describe latency mean (ms)")), 0.0);
+  EXPECT_TRUE(warned("/left/image_rect' is 752x480", "/right/image_rect' is 376x240")) << "the size mismatch was not named";
+
+  // Only left images (the right camera died): after ~sync_warning_timeout a warning names both topics.
+  ros::Time alone = next;
+  for (int i = 0; i < 5; ++i)
+  {
+    alone += ros::Duration(0.05);
+    left_pub.publish(openable_ros_test::toMsg(left, enc::MONO8, alone, "cam0"));
+    ros::WallDuration(0.1).sleep();
+  }
+  EXPECT_TRUE(waitFor([&] { return warned("'/left/image_rect' 5, '/right/image_rect' 0", "~approximate_sync"); }, 10.0))
+      << "no warning naming the topics after ~sync_warning_timeout without a pair";
+  EXPECT_EQ(diagnostics.number("history size"), 41);
+
+  // A stamp before the previous one with ~reset_on_time_jump (the .test sets it): a new history.
+  const ros::Time restart = frames.front().first;
+  left_pub.publish(openable_ros_test::toMsg(left, enc::MONO8, restart, "cam0"));
+  right_pub.publish(
+      openable_ros_test::toMsg(cv::imread(dir + "/cam1/data/" + frames[0].second, cv::IMREAD_GRAYSCALE), enc::MONO8,
+                               restart, "cam1"));
+  EXPECT_TRUE(waitFor([&] { return diagnostics.number("history size") == 1; }, 10.0))
+      << "history size " << diagnostics.value("history size") << " after a time jump with ~reset_on_time_jump";
 }
 
 int main(int argc, char** argv)
