@@ -105,7 +105,6 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   }
 
   std::unique_lock<std::mutex> lock(mutex_);
-  matrix_rate_ = std::min(matrix_rate_, 30.0);
   try
   {
     describer_ = std::make_unique<openable::FrameDescriber>(config);
@@ -117,9 +116,9 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
     NODELET_ERROR_STREAM("cannot build the detector: " << e.what() << "; this nodelet stays idle");
     return false;
   }
-  catch (const cv::Exception& e)
+  catch (const std::exception& e)
   {
-    NODELET_ERROR_STREAM("cannot build the detector (OpenCV): " << e.what() << "; this nodelet stays idle");
+    NODELET_ERROR_STREAM("cannot build the detector: " << e.what() << "; this nodelet stays idle");
     return false;
   }
   view_.setSize(matrix_size);
@@ -525,6 +524,13 @@ void DetectorBase::processFrame(const std_msgs::Header& header, const std::strin
   {
     ++rejected_["OpenCV error"];
     warnThrottled("opencv", kWarnPeriod, "'" + topic + "': OpenCV: " + e.what() + " (frame skipped)");
+    return;
+  }
+  catch (const std::exception& e)
+  {
+    // Anything else from the core must not unwind into the nodelet manager either.
+    ++rejected_["unexpected error"];
+    warnThrottled("exception", kWarnPeriod, "'" + topic + "': " + e.what() + " (frame skipped)");
     return;
   }
   if (!detector_->localisationMode())
