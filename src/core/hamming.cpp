@@ -131,8 +131,28 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t
                                                                    size_t stride, size_t words, size_t count,
                                                                    uint32_t* out)
 {
+  if (words > 24)
+  {
+    for (size_t i = 0; i < count; ++i)
+      out[i] = pairAvx512Inline(q, rows + i * stride, words);
+    return;
+  }
+  // Descriptors of up to three 512-bit vectors (LDB: 22 words): the query and the masks stay in registers
+  // for the whole row instead of being reloaded for every stored frame.
+  const auto maskFor = [words](size_t first) -> __mmask8 {
+    return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
+  };
+  const __mmask8 m0 = maskFor(0), m1 = maskFor(8), m2 = maskFor(16);
+  const __m512i q0 = _mm512_maskz_loadu_epi64(m0, q), q1 = _mm512_maskz_loadu_epi64(m1, q + 8),
+                q2 = _mm512_maskz_loadu_epi64(m2, q + 16);
   for (size_t i = 0; i < count; ++i)
-    out[i] = pairAvx512Inline(q, rows + i * stride, words);
+  {
+    const uint64_t* r = rows + i * stride;
+    __m512i total = _mm512_popcnt_epi64(_mm512_xor_si512(q0, _mm512_maskz_loadu_epi64(m0, r)));
+    total = _mm512_add_epi64(total, _mm512_popcnt_epi64(_mm512_xor_si512(q1, _mm512_maskz_loadu_epi64(m1, r + 8))));
+    total = _mm512_add_epi64(total, _mm512_popcnt_epi64(_mm512_xor_si512(q2, _mm512_maskz_loadu_epi64(m2, r + 16))));
+    out[i] = static_cast<uint32_t>(_mm512_reduce_add_epi64(total));
+  }
 }
 #pragma GCC diagnostic pop
 #endif

@@ -14,6 +14,23 @@ namespace
 /// Columns processed together: their descriptors (and those L frames earlier) stay in cache between the
 /// two distance computations of the recurrence.
 constexpr size_t kChunk = 256;
+
+/// True when every count equals `full`: the chains of a chunk are all complete (the steady state).
+bool allFull(const uint16_t* counts, size_t n, uint16_t full)
+{
+  bool all = true;
+  for (size_t i = 0; i < n; ++i)
+    all &= counts[i] == full;  // no early exit: the loop vectorises
+  return all;
+}
+
+/// The steady-state recurrence, branch-free so that it vectorises: next = previous + entering - leaving.
+void addAndDrop(const uint32_t* __restrict previous, const uint32_t* __restrict entering,
+                const uint32_t* __restrict leaving, size_t n, uint32_t* __restrict next)
+{
+  for (size_t i = 0; i < n; ++i)
+    next[i] = previous[i] + entering[i] - leaving[i];
+}
 }  // namespace
 
 SequenceMatcher::SequenceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional)
@@ -90,7 +107,8 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
     }
     first_id_ = new_first;
   }
-  current_distances_.resize(candidates);
+  // The reverse pass reuses this frame's distances; without it they live only chunk by chunk.
+  current_distances_.resize(bidirectional_ ? candidates : kChunk);
   advanceForward(reference, candidates);
   if (bidirectional_)
     advanceReverse(reference, candidates);
@@ -107,7 +125,6 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t colu
   const bool can_drop = queries_ > L && L > 1;  // the query L frames ago exists
   const uint64_t* query = recentQuery(0);
   const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
-  uint32_t* current = current_distances_.data();
   dropped_distances_.resize(kChunk);
 
   // Ascending: the descriptors L frames back, needed for the leaving term, were read one or two chunks
@@ -115,33 +132,41 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t colu
   for (size_t begin = 0; begin < columns; begin += kChunk)
   {
     const size_t end = std::min(columns, begin + kChunk);
-    metric_.row(query, reference.descriptor(begin), end - begin, current + begin);
+    uint32_t* current = current_distances_.data() + (bidirectional_ ? begin : 0);  // current[c - begin]
+    metric_.row(query, reference.descriptor(begin), end - begin, current);
     const size_t drop_begin = std::max(begin, L);  // d(t - L, j - L) where j - L is stored
     if (can_drop && drop_begin < end)
       metric_.row(leaving_query, reference.descriptor(drop_begin - L), end - drop_begin,
                   dropped_distances_.data() + (drop_begin - begin));
+    if (can_drop && begin >= L && end <= old.count.size() && allFull(old.count.data() + begin - 1, end - begin, L))
+    {
+      addAndDrop(old.sum.data() + begin - 1, current, dropped_distances_.data(), end - begin, next.sum.data() + begin);
+      std::fill(next.count.begin() + long(begin), next.count.begin() + long(end), static_cast<uint16_t>(L));
+      continue;
+    }
     for (size_t c = begin; c < end; ++c)
     {
       const uint16_t previous_count = (L > 1 && c > 0 && c - 1 < old.count.size()) ? old.count[c - 1] : 0;
+      const uint32_t entering = current[c - begin];
       if (previous_count == 0)
       {
-        next.sum[c] = current[c];
+        next.sum[c] = entering;
         next.count[c] = 1;
       }
       else if (previous_count < L)
       {
-        next.sum[c] = old.sum[c - 1] + current[c];
+        next.sum[c] = old.sum[c - 1] + entering;
         next.count[c] = previous_count + 1;
       }
       else if (c >= L && can_drop)
       {
-        next.sum[c] = old.sum[c - 1] + current[c] - dropped_distances_[c - begin];
+        next.sum[c] = old.sum[c - 1] + entering - dropped_distances_[c - begin];
         next.count[c] = static_cast<uint16_t>(L);
       }
       else
       {
         // The frame leaving the sequence was evicted from a bounded history: the chain starts again.
-        next.sum[c] = current[c];
+        next.sum[c] = entering;
         next.count[c] = 1;
       }
     }
@@ -170,6 +195,15 @@ void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t colu
     const size_t drop_end = std::min(end, stored > L ? stored - L : 0);
     if (can_drop && begin < drop_end)
       metric_.row(leaving_query, reference.descriptor(begin + L), drop_end - begin, dropped_distances_.data());
+    if (can_drop && end <= drop_end && end < old.count.size() &&
+        allFull(old.count.data() + begin + 1, end - begin, L))
+    {
+      addAndDrop(old.sum.data() + begin + 1, current + begin, dropped_distances_.data(), end - begin,
+                 next.sum.data() + begin);
+      std::fill(next.count.begin() + long(begin), next.count.begin() + long(end), static_cast<uint16_t>(L));
+      end = begin;
+      continue;
+    }
     for (size_t c = begin; c < end; ++c)
     {
       const uint16_t previous_count = c + 1 < old.count.size() ? old.count[c + 1] : 0;
