@@ -3,10 +3,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <opencv2/core.hpp>
 #include <utility>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace openable
 {
@@ -123,7 +122,7 @@ private:
   int columns_used_ = 0;
   uint64_t queries_ = 0;
   bool has_first_reference_ = false;
-  uint64_t first_reference_id_ = 0;  ///< reference id of column 0
+  uint64_t first_reference_id_ = 0;                  ///< reference id of column 0
   std::deque<std::pair<uint64_t, uint64_t>> loops_;  ///< (query index, reference id)
   size_t max_loops_ = 10000;
 };

@@ -1,13 +1,13 @@
 #pragma once
 
-#include <array>
-#include <string>
-
 #include <geometry_msgs/Pose.h>
-#include <opencv2/core.hpp>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <std_msgs/Header.h>
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <string>
 
 #include "openable/geometric_verifier.h"
 #include "openable/loop_detector.h"

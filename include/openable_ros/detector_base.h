@@ -1,14 +1,5 @@
 #pragma once
 
-#include <array>
-#include <deque>
-#include <functional>
-#include <map>
-#include <memory>
-#include <mutex>
-#include <string>
-#include <vector>
-
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/Point.h>
@@ -20,14 +11,23 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <array>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
 #include "openable/config.h"
 #include "openable/distance_matrix_view.h"
 #include "openable/frame_describer.h"
 #include "openable/geometric_verifier.h"
 #include "openable/loop_detector.h"
 #include "openable_ros/DetectorConfig.h"
-#include "openable_ros/LoopClosure.h"
 #include "openable_ros/LoadMap.h"
+#include "openable_ros/LoopClosure.h"
 #include "openable_ros/SaveMap.h"
 
 namespace openable_ros
@@ -194,7 +194,7 @@ private:
   ros::WallTime last_matrix_time_;
   ros::WallTime last_markers_time_;
   bool has_keyframe_pose_ = false;
-  std::array<double, 7> keyframe_pose_{ { 0, 0, 0, 0, 0, 0, 1 } };
+  std::array<double, 7> keyframe_pose_{{0, 0, 0, 0, 0, 0, 1}};
   std::vector<float> row_;
   std::deque<geometry_msgs::Point> trajectory_;
   std::deque<std::pair<geometry_msgs::Point, geometry_msgs::Point>> loop_edges_;

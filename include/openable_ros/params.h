@@ -1,9 +1,9 @@
 #pragma once
 
+#include <ros/node_handle.h>
+
 #include <string>
 #include <vector>
-
-#include <ros/node_handle.h>
 
 #include "openable/config.h"
 
@@ -20,8 +20,8 @@ openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openabl
 
 /// ROS-only parameters with a rule. Each reads ~name, and when it is missing keeps `fallback`; when it
 /// is set but breaks the rule (or has the wrong type) it explains in `warnings` and keeps `fallback`.
-double readDouble(const ros::NodeHandle& private_nh, const std::string& name, double fallback, double min,
-                  double max, const std::string& units, std::vector<std::string>& warnings);
+double readDouble(const ros::NodeHandle& private_nh, const std::string& name, double fallback, double min, double max,
+                  const std::string& units, std::vector<std::string>& warnings);
 int readInt(const ros::NodeHandle& private_nh, const std::string& name, int fallback, int min, int max,
             std::vector<std::string>& warnings);
 bool readBool(const ros::NodeHandle& private_nh, const std::string& name, bool fallback,

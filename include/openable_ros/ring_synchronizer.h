@@ -1,10 +1,10 @@
 #pragma once
 
+#include <sensor_msgs/Image.h>
+
 #include <cstddef>
 #include <deque>
 #include <vector>
-
-#include <sensor_msgs/Image.h>
 
 namespace openable_ros
 {

@@ -3,9 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <string>
-
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "openable/error.h"
 #include "openable/render.h"
@@ -117,8 +116,9 @@ void DistanceMatrixView::setSize(int size)
     for (int i = 0; i < keep; ++i)
     {
       const uint64_t query_index = queries_ - uint64_t(keep) + uint64_t(i);
-      ordered.row(ordered.rows - keep + i).colRange(0, columns_used_).copyTo(
-          cells_.row(int(query_index % uint64_t(size_))).colRange(0, columns_used_));
+      ordered.row(ordered.rows - keep + i)
+          .colRange(0, columns_used_)
+          .copyTo(cells_.row(int(query_index % uint64_t(size_))).colRange(0, columns_used_));
     }
     return;
   }

@@ -1,7 +1,8 @@
 // openable_ros/MonoDetector: ABLE-M, loop closures from one camera.
 #include <image_transport/image_transport.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/Image.h>
+
+#include <pluginlib/class_list_macros.hpp>
 
 #include "openable_ros/conversions.h"
 #include "openable_ros/detector_base.h"
@@ -21,9 +22,9 @@ private:
     }
     input_transport_ = std::make_unique<image_transport::ImageTransport>(getNodeHandle());
     // Transport hints from the private handle: ~image_transport:=compressed works.
-    image_sub_ = input_transport_->subscribe("image", uint32_t(queueSize()), &MonoDetector::imageCallback, this,
-                                             image_transport::TransportHints("raw", ros::TransportHints(),
-                                                                             getPrivateNodeHandle()));
+    image_sub_ = input_transport_->subscribe(
+        "image", uint32_t(queueSize()), &MonoDetector::imageCallback, this,
+        image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
     if (verifyEnabled())
     {
       // Geometric verification needs the intrinsics (rectified image: P).
@@ -41,9 +42,10 @@ private:
       rejectFrame("bad image", "'" + image_sub_.getTopic() + "': " + error);
       return;
     }
-    processFrame(msg->header, image_sub_.getTopic(), [&image](const openable::FrameDescriber& describer) {
-      return describer.describeImage(image);
-    }, VerifyImages{ image, cv::Mat() });
+    processFrame(
+        msg->header, image_sub_.getTopic(),
+        [&image](const openable::FrameDescriber& describer) { return describer.describeImage(image); },
+        VerifyImages{image, cv::Mat()});
   }
 
   std::unique_ptr<image_transport::ImageTransport> input_transport_;

@@ -1,7 +1,8 @@
 // openable_ros/PanoramicDetector: ABLE-P, loop closures from a panoramic camera, in both directions.
 #include <image_transport/image_transport.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/Image.h>
+
+#include <pluginlib/class_list_macros.hpp>
 
 #include "openable_ros/conversions.h"
 #include "openable_ros/detector_base.h"
@@ -32,9 +33,8 @@ private:
       int panoramas = 0;
       if (pnh.getParam("panoramas", panoramas) && panoramas != int(cameras_.size()))
       {
-        NODELET_WARN_STREAM("parameter ~panoramas: value '" << panoramas << "' does not match the "
-                                                            << cameras_.size() << " ~cameras; using "
-                                                            << cameras_.size());
+        NODELET_WARN_STREAM("parameter ~panoramas: value '" << panoramas << "' does not match the " << cameras_.size()
+                                                            << " ~cameras; using " << cameras_.size());
       }
       pnh.setParam("panoramas", int(cameras_.size()));
     }
@@ -50,20 +50,20 @@ private:
                                                          &PanoramicDetector::panoramaCallback, this, hints));
       return;
     }
-    synchronizer_ = std::make_unique<RingSynchronizer>(cameras_.size(), size_t(queueSize()),
-                                                       approximate ? max_skew : 0.0);
+    synchronizer_ =
+        std::make_unique<RingSynchronizer>(cameras_.size(), size_t(queueSize()), approximate ? max_skew : 0.0);
     std::vector<std::string> topics;
     for (size_t i = 0; i < cameras_.size(); ++i)
     {
       subscribers_.push_back(input_transport_->subscribe(
           cameras_[i], uint32_t(queueSize()),
-          boost::function<void(const sensor_msgs::ImageConstPtr&)>(
-              [this, i](const sensor_msgs::ImageConstPtr& msg) { cameraCallback(i, msg); }),
+          boost::function<void(const sensor_msgs::ImageConstPtr&)>([this, i](const sensor_msgs::ImageConstPtr& msg)
+                                                                   { cameraCallback(i, msg); }),
           ros::VoidPtr(), hints));
       topics.push_back(subscribers_.back().getTopic());
     }
-    startSyncWatchdog(topics, approximate ? "Raise ~max_skew if the cameras are not triggered together." :
-                                            "If the cameras are not hardware-triggered, set ~approximate_sync "
+    startSyncWatchdog(topics, approximate ? "Raise ~max_skew if the cameras are not triggered together."
+                                          : "If the cameras are not hardware-triggered, set ~approximate_sync "
                                             "true (with ~max_skew).");
   }
 
@@ -76,9 +76,8 @@ private:
       rejectFrame("bad image", "'" + subscribers_[0].getTopic() + "': " + error);
       return;
     }
-    processFrame(msg->header, subscribers_[0].getTopic(), [&image](const openable::FrameDescriber& describer) {
-      return describer.describeImage(image);
-    });
+    processFrame(msg->header, subscribers_[0].getTopic(),
+                 [&image](const openable::FrameDescriber& describer) { return describer.describeImage(image); });
   }
 
   void cameraCallback(size_t index, const sensor_msgs::ImageConstPtr& msg)
@@ -101,9 +100,9 @@ private:
       }
     }
     // The ring is stamped by its first camera.
-    processFrame(set[0]->header, subscribers_[0].getTopic(), [&images](const openable::FrameDescriber& describer) {
-      return describer.describe(describer.preprocessor().patchesFromCameras(images));
-    });
+    processFrame(set[0]->header, subscribers_[0].getTopic(),
+                 [&images](const openable::FrameDescriber& describer)
+                 { return describer.describe(describer.preprocessor().patchesFromCameras(images)); });
   }
 
   std::vector<std::string> cameras_;

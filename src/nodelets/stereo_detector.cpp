@@ -1,17 +1,17 @@
 // openable_ros/StereoDetector: ABLE-S, loop closures from a rectified stereo pair (D-LDB by default).
-#include <memory>
-
-#include <boost/function.hpp>
 #include <image_transport/image_transport.h>
 #include <image_transport/subscriber_filter.h>
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/sync_policies/exact_time.h>
 #include <message_filters/synchronizer.h>
-#include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <stereo_msgs/DisparityImage.h>
+
+#include <boost/function.hpp>
+#include <memory>
+#include <pluginlib/class_list_macros.hpp>
 
 #include "openable/stereo.h"
 #include "openable_ros/conversions.h"
@@ -56,14 +56,15 @@ private:
     left_sub_.registerCallback(boost::function<void(const sensor_msgs::ImageConstPtr&)>(
         [this](const sensor_msgs::ImageConstPtr&) { noteInput(0); }));
     // camera_info is optional: when it comes, it is checked against the images (calibrated, same size).
-    left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-        "left/camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) {
-          left_info_ = msg;
-          updateCamera();
-        });
+    left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>("left/camera_info", 1,
+                                                           [this](const sensor_msgs::CameraInfoConstPtr& msg)
+                                                           {
+                                                             left_info_ = msg;
+                                                             updateCamera();
+                                                           });
 
-    const std::string advice = approximate ? "Raise ~queue_size if the stamps are far apart." :
-                                             "If the stamps are not identical, set ~approximate_sync true.";
+    const std::string advice = approximate ? "Raise ~queue_size if the stamps are far apart."
+                                           : "If the stamps are not identical, set ~approximate_sync true.";
     if (use_disparity)
     {
       disparity_sub_.subscribe(nh, "disparity", queue);
@@ -78,33 +79,33 @@ private:
       else
       {
         exact_disparity_ = std::make_unique<message_filters::Synchronizer<ExactDisparity>>(ExactDisparity(queue),
-                                                                                          left_sub_, disparity_sub_);
+                                                                                           left_sub_, disparity_sub_);
         exact_disparity_->registerCallback(&StereoDetector::disparityCallback, this);
       }
-      startSyncWatchdog({ left_sub_.getTopic(), disparity_sub_.getTopic() }, advice);
+      startSyncWatchdog({left_sub_.getTopic(), disparity_sub_.getTopic()}, advice);
       return;
     }
     right_sub_.subscribe(*input_transport_, "right/image_rect", queue, hints);
     right_sub_.registerCallback(boost::function<void(const sensor_msgs::ImageConstPtr&)>(
         [this](const sensor_msgs::ImageConstPtr&) { noteInput(1); }));
-    right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>(
-        "right/camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) {
-          right_info_ = msg;
-          updateCamera();
-        });
+    right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>("right/camera_info", 1,
+                                                            [this](const sensor_msgs::CameraInfoConstPtr& msg)
+                                                            {
+                                                              right_info_ = msg;
+                                                              updateCamera();
+                                                            });
     if (approximate)
     {
       approximate_pair_ = std::make_unique<message_filters::Synchronizer<ApproximatePair>>(ApproximatePair(queue),
-                                                                                          left_sub_, right_sub_);
+                                                                                           left_sub_, right_sub_);
       approximate_pair_->registerCallback(&StereoDetector::pairCallback, this);
     }
     else
     {
-      exact_pair_ =
-          std::make_unique<message_filters::Synchronizer<ExactPair>>(ExactPair(queue), left_sub_, right_sub_);
+      exact_pair_ = std::make_unique<message_filters::Synchronizer<ExactPair>>(ExactPair(queue), left_sub_, right_sub_);
       exact_pair_->registerCallback(&StereoDetector::pairCallback, this);
     }
-    startSyncWatchdog({ left_sub_.getTopic(), right_sub_.getTopic() }, advice);
+    startSyncWatchdog({left_sub_.getTopic(), right_sub_.getTopic()}, advice);
   }
 
   /// With ~verify: the verifier's camera from the pair's projections (the baseline from the right P), or
@@ -119,8 +120,7 @@ private:
   }
 
   /// False (with the frame rejected) when a received camera_info says the image cannot be used.
-  bool checkInfo(const sensor_msgs::CameraInfoConstPtr& info, const sensor_msgs::Image& image,
-                 const std::string& topic)
+  bool checkInfo(const sensor_msgs::CameraInfoConstPtr& info, const sensor_msgs::Image& image, const std::string& topic)
   {
     if (!info)
     {
@@ -128,16 +128,16 @@ private:
     }
     if (info->K[0] == 0.0)
     {
-      rejectFrame("uncalibrated camera", "'" + topic + "': camera_info has K[0] = 0 (uncalibrated); expected a "
-                                                       "calibrated, rectified camera");
+      rejectFrame("uncalibrated camera", "'" + topic +
+                                             "': camera_info has K[0] = 0 (uncalibrated); expected a "
+                                             "calibrated, rectified camera");
       return false;
     }
     if (info->width != image.width || info->height != image.height)
     {
-      rejectFrame("camera_info size mismatch",
-                  "'" + topic + "': image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-                      " but its camera_info says " + std::to_string(info->width) + "x" +
-                      std::to_string(info->height));
+      rejectFrame("camera_info size mismatch", "'" + topic + "': image is " + std::to_string(image.width) + "x" +
+                                                   std::to_string(image.height) + " but its camera_info says " +
+                                                   std::to_string(info->width) + "x" + std::to_string(info->height));
       return false;
     }
     return true;
@@ -174,17 +174,19 @@ private:
       return;
     }
     const bool needs_disparity = config().descriptor == "D-LDB";
-    processFrame(left_msg->header, left_sub_.getTopic(),
-                 [&left, &right, needs_disparity, this](const openable::FrameDescriber& describer) {
-                   if (!needs_disparity)
-                   {
-                     // A mono descriptor on the left image: no SGBM cost.
-                     return describer.describeImage(left);
-                   }
-                   const cv::Mat disparity = openable::disparityFromPair(left, right, config());
-                   return describer.describe(describer.preprocessor().patchesWithDisparity(left, disparity));
-                 },
-                 VerifyImages{ left, right });
+    processFrame(
+        left_msg->header, left_sub_.getTopic(),
+        [&left, &right, needs_disparity, this](const openable::FrameDescriber& describer)
+        {
+          if (!needs_disparity)
+          {
+            // A mono descriptor on the left image: no SGBM cost.
+            return describer.describeImage(left);
+          }
+          const cv::Mat disparity = openable::disparityFromPair(left, right, config());
+          return describer.describe(describer.preprocessor().patchesWithDisparity(left, disparity));
+        },
+        VerifyImages{left, right});
   }
 
   void disparityCallback(const sensor_msgs::ImageConstPtr& left_msg,
@@ -216,10 +218,13 @@ private:
     {
       return;
     }
-    processFrame(left_msg->header, left_sub_.getTopic(), [&left, &raw](const openable::FrameDescriber& describer) {
-      return describer.describe(
-          describer.preprocessor().patchesWithDisparity(left, openable::disparityFromImage(raw)));
-    }, VerifyImages{ left, cv::Mat() });
+    processFrame(
+        left_msg->header, left_sub_.getTopic(),
+        [&left, &raw](const openable::FrameDescriber& describer) {
+          return describer.describe(
+              describer.preprocessor().patchesWithDisparity(left, openable::disparityFromImage(raw)));
+        },
+        VerifyImages{left, cv::Mat()});
   }
 
   bool use_disparity_ = false;

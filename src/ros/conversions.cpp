@@ -1,9 +1,10 @@
 #include "openable_ros/conversions.h"
 
-#include <boost/make_shared.hpp>
 #include <cv_bridge/cv_bridge.h>
-#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
+
+#include <boost/make_shared.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace openable_ros
 {
@@ -12,8 +13,8 @@ namespace enc = sensor_msgs::image_encodings;
 bool isSupportedEncoding(const std::string& encoding)
 {
   return encoding == enc::MONO8 || encoding == enc::TYPE_8UC1 || encoding == enc::BGR8 || encoding == enc::RGB8 ||
-         encoding == enc::BGRA8 || encoding == enc::RGBA8 || encoding == enc::TYPE_8UC3 ||
-         encoding == enc::TYPE_8UC4 || encoding == enc::MONO16;
+         encoding == enc::BGRA8 || encoding == enc::RGBA8 || encoding == enc::TYPE_8UC3 || encoding == enc::TYPE_8UC4 ||
+         encoding == enc::MONO16;
 }
 
 const char* supportedEncodings()
@@ -35,8 +36,8 @@ bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::str
   }
   if (size_t(msg->step) * msg->height > msg->data.size())
   {
-    error = "image data holds " + std::to_string(msg->data.size()) + " bytes, but step x height = " +
-            std::to_string(size_t(msg->step) * msg->height);
+    error = "image data holds " + std::to_string(msg->data.size()) +
+            " bytes, but step x height = " + std::to_string(size_t(msg->step) * msg->height);
     return false;
   }
   try

@@ -1,11 +1,5 @@
 #include "openable_ros/detector_base.h"
 
-#include <chrono>
-#include <cmath>
-#include <fstream>
-#include <sstream>
-
-#include <boost/make_shared.hpp>
 #include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <sensor_msgs/image_encodings.h>
@@ -13,6 +7,12 @@
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2/exceptions.h>
 #include <visualization_msgs/MarkerArray.h>
+
+#include <boost/make_shared.hpp>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "openable/error.h"
 #include "openable_ros/LoopClosure.h"
@@ -37,8 +37,8 @@ double millisecondsSince(std::chrono::steady_clock::time_point start)
 
 openable::DistanceMatrixView::Mode viewMode(const std::string& mode)
 {
-  return mode == "rolling_window" ? openable::DistanceMatrixView::Mode::kRollingWindow :
-                                    openable::DistanceMatrixView::Mode::kWholeHistory;
+  return mode == "rolling_window" ? openable::DistanceMatrixView::Mode::kRollingWindow
+                                  : openable::DistanceMatrixView::Mode::kWholeHistory;
 }
 
 geometry_msgs::Point position(const std::array<double, 7>& pose)
@@ -51,9 +51,7 @@ geometry_msgs::Point position(const std::array<double, 7>& pose)
 }
 }  // namespace
 
-DetectorBase::DetectorBase() : view_(512)
-{
-}
+DetectorBase::DetectorBase() : view_(512) {}
 
 DetectorBase::~DetectorBase()
 {
@@ -94,8 +92,9 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   }
   if ((keyframe_distance_ > 0.0 || keyframe_angle_ > 0.0) && fixed_frame_.empty())
   {
-    warnings.push_back("~keyframe_distance / ~keyframe_angle need ~fixed_frame for the camera poses; "
-                       "~fixed_frame is empty, so every frame is kept");
+    warnings.push_back(
+        "~keyframe_distance / ~keyframe_angle need ~fixed_frame for the camera poses; "
+        "~fixed_frame is empty, so every frame is kept");
     keyframe_distance_ = 0.0;
     keyframe_angle_ = 0.0;
   }
@@ -190,8 +189,7 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   // The server reads its start values from the same private parameters (clamped to the .cfg ranges) and
   // calls reconfigure() at once, which takes mutex_: hence after the unlock.
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<DetectorConfig>>(reconfigure_mutex_, pnh);
-  reconfigure_server_->setCallback(
-      [this](DetectorConfig& c, uint32_t level) { reconfigure(c, level); });
+  reconfigure_server_->setCallback([this](DetectorConfig& c, uint32_t level) { reconfigure(c, level); });
   return true;
 }
 
@@ -329,9 +327,8 @@ bool DetectorBase::lookupPoseLocked(const std_msgs::Header& header, std::array<d
   {
     const geometry_msgs::TransformStamped t =
         tf_buffer_->lookupTransform(fixed_frame_, header.frame_id, header.stamp, ros::Duration(tf_timeout_));
-    pose = { t.transform.translation.x, t.transform.translation.y, t.transform.translation.z,
-             t.transform.rotation.x,    t.transform.rotation.y,    t.transform.rotation.z,
-             t.transform.rotation.w };
+    pose = {t.transform.translation.x, t.transform.translation.y, t.transform.translation.z, t.transform.rotation.x,
+            t.transform.rotation.y,    t.transform.rotation.z,    t.transform.rotation.w};
     return true;
   }
   catch (const tf2::TransformException& e)
@@ -398,9 +395,8 @@ void DetectorBase::setCamera(const openable::PinholeCamera& camera)
   try
   {
     verifier_ = std::make_unique<openable::GeometricVerifier>(camera);
-    NODELET_INFO_STREAM("geometric verification on: fx " << camera.fx << ", baseline " << camera.baseline
-                                                         << " m (" << (camera.stereo() ? "stereo PnP" : "mono essential")
-                                                         << ")");
+    NODELET_INFO_STREAM("geometric verification on: fx " << camera.fx << ", baseline " << camera.baseline << " m ("
+                                                         << (camera.stereo() ? "stereo PnP" : "mono essential") << ")");
   }
   catch (const openable::Error& e)
   {
@@ -735,7 +731,8 @@ void DetectorBase::resetStreamLocked()
 
 bool DetectorBase::loadMapLocked(const std::string& path, std::string& message)
 {
-  openable::PlaceDatabase map = [&]() {
+  openable::PlaceDatabase map = [&]()
+  {
     try
     {
       return openable::PlaceDatabase::load(path);
@@ -880,9 +877,8 @@ bool DetectorBase::reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Respons
   }
   resetStreamLocked();
   response.success = true;
-  response.message = detector_->localisationMode() ?
-                         "query sequences restarted; the reference map is kept" :
-                         "history cleared";
+  response.message =
+      detector_->localisationMode() ? "query sequences restarted; the reference map is kept" : "history cleared";
   NODELET_INFO_STREAM("reset: " << response.message);
   return true;
 }
@@ -971,8 +967,8 @@ void DetectorBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
   {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, detector_->localisationMode() ? "localising" : "running");
   }
-  status.add("mode", detector_->localisationMode() ? "localisation (query stream vs loaded map)" :
-                                                     "loop closure (stream vs its own history)");
+  status.add("mode", detector_->localisationMode() ? "localisation (query stream vs loaded map)"
+                                                   : "loop closure (stream vs its own history)");
   status.add("input rate (Hz)", rate);
   status.add("frames received", frames_received_);
   status.add("frames stored", frames_stored_);

@@ -1,9 +1,9 @@
 #include "openable_ros/params.h"
 
+#include <XmlRpcValue.h>
+
 #include <cmath>
 #include <sstream>
-
-#include <XmlRpcValue.h>
 
 #include "openable/error.h"
 
@@ -199,8 +199,8 @@ openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openabl
   return defaults;
 }
 
-double readDouble(const ros::NodeHandle& private_nh, const std::string& name, double fallback, double min,
-                  double max, const std::string& units, std::vector<std::string>& warnings)
+double readDouble(const ros::NodeHandle& private_nh, const std::string& name, double fallback, double min, double max,
+                  const std::string& units, std::vector<std::string>& warnings)
 {
   XmlRpc::XmlRpcValue value;
   if (!private_nh.getParam(name, value))

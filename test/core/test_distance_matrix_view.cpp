@@ -1,9 +1,9 @@
 // DistanceMatrixView: bounded, min-pooled display of the distance matrix (no ROS, no master).
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "openable/distance_matrix_view.h"
 #include "openable/error.h"

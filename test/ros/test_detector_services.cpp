@@ -1,18 +1,18 @@
 // Checker for the services and for bad input, against the mono nodelet: ~save_map / ~load_map / ~reset
 // round trip, corrupt and incompatible maps refused with the node still serving, unsupported encodings,
 // empty images and stamps going backwards skipped without losing the history.
-#include <cstdio>
-#include <fstream>
-#include <mutex>
-#include <vector>
-
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
 #include <openable_ros/LoadMap.h>
 #include <openable_ros/LoopClosure.h>
 #include <openable_ros/SaveMap.h>
 #include <ros/ros.h>
-#include <dynamic_reconfigure/Reconfigure.h>
 #include <std_srvs/Trigger.h>
+
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <vector>
 
 #include "openable/config.h"
 #include "openable/frame_describer.h"
@@ -240,7 +240,8 @@ TEST_F(DetectorServices, DynamicReconfigureChangesMatchingLiveAndRevertsRefusedV
 {
   ASSERT_TRUE(ros::service::waitForService(detector_ + "/set_parameters", ros::Duration(10.0)));
   ros::ServiceClient client = nh_.serviceClient<dynamic_reconfigure::Reconfigure>(detector_ + "/set_parameters");
-  auto setDouble = [&](const std::string& name, double value) {
+  auto setDouble = [&](const std::string& name, double value)
+  {
     dynamic_reconfigure::Reconfigure srv;
     dynamic_reconfigure::DoubleParameter p;
     p.name = name;
@@ -249,7 +250,8 @@ TEST_F(DetectorServices, DynamicReconfigureChangesMatchingLiveAndRevertsRefusedV
     EXPECT_TRUE(client.call(srv));
     return srv.response.config;
   };
-  auto find = [](const dynamic_reconfigure::Config& config, const std::string& name) {
+  auto find = [](const dynamic_reconfigure::Config& config, const std::string& name)
+  {
     for (const auto& d : config.doubles)
     {
       if (d.name == name)

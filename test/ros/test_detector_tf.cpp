@@ -2,16 +2,16 @@
 // ~keyframe_distance 1 m: poses come from tf at each image's stamp, a frame is stored only after the camera
 // moved 1 m, standstill stores nothing, a frame whose transform is missing is kept without pose, and loop
 // closures carry both camera poses.
-#include <cstdio>
-#include <mutex>
-#include <vector>
-
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <openable_ros/LoopClosure.h>
 #include <ros/ros.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
+
+#include <cstdio>
+#include <mutex>
+#include <vector>
 
 #include "test_helpers.h"
 
@@ -55,7 +55,8 @@ TEST(DetectorTf, PosesFromTfAndKeyframesByDistance)
   // the places of the first, so its keyframes close loops with poses 5 m apart.
   ros::Time stamp(500.0);
   int published = 0;
-  auto send = [&](int image_index, double x, double y, const std::string& frame) {
+  auto send = [&](int image_index, double x, double y, const std::string& frame)
+  {
     stamp += ros::Duration(0.1);
     geometry_msgs::TransformStamped t;
     t.header.stamp = stamp;
@@ -98,7 +99,8 @@ TEST(DetectorTf, PosesFromTfAndKeyframesByDistance)
   // The move of 5 m sideways makes the first frame of the second walk a keyframe too: 1 + 19 more.
   EXPECT_EQ(diagnostics.number("frames stored"), 41);
   ASSERT_TRUE(waitFor(
-      [&] {
+      [&]
+      {
         std::lock_guard<std::mutex> lock(mutex);
         return !loops.empty() && diagnostics.number("loop closures") == long(loops.size());
       },

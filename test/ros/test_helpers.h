@@ -2,16 +2,16 @@
 // waiting with deadlines.
 #pragma once
 
+#include <cv_bridge/cv_bridge.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ros/ros.h>
+#include <sensor_msgs/image_encodings.h>
+
 #include <functional>
 #include <map>
 #include <mutex>
-#include <string>
-
-#include <cv_bridge/cv_bridge.h>
-#include <diagnostic_msgs/DiagnosticArray.h>
 #include <opencv2/imgcodecs.hpp>
-#include <ros/ros.h>
-#include <sensor_msgs/image_encodings.h>
+#include <string>
 
 namespace openable_ros_test
 {

@@ -2,13 +2,13 @@
 // images, day_right then night_right as one stream at a fixed rate. The night traversal revisits the day
 // one, so most night frames must close a loop with their day twin (same index, within 2), no day frame may
 // close one, and distance_matrix is rendered only while someone subscribes.
-#include <cstdio>
-#include <mutex>
-#include <vector>
-
 #include <gtest/gtest.h>
 #include <openable_ros/LoopClosure.h>
 #include <ros/ros.h>
+
+#include <cstdio>
+#include <mutex>
+#include <vector>
 
 #include "test_helpers.h"
 

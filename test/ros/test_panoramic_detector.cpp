@@ -5,14 +5,14 @@
 //
 // Each panorama is 6 real Gardens Point images side by side (one per sub-panorama), so every place has
 // real, distinct content; the return trip is darker (x0.8), as another time of day would be.
-#include <cstdio>
-#include <mutex>
-#include <vector>
-
 #include <gtest/gtest.h>
 #include <openable_ros/LoopClosure.h>
-#include <opencv2/imgproc.hpp>
 #include <ros/ros.h>
+
+#include <cstdio>
+#include <mutex>
+#include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "test_helpers.h"
 
@@ -86,7 +86,8 @@ TEST(PanoramicDetector, ReversedRevisitIsReportedWithDirectionMinusOne)
   }
   ros::Subscriber sub = nh.subscribe("loop_closures", 1000, loopCallback);
   ASSERT_TRUE(waitFor(
-      [&] {
+      [&]
+      {
         for (const auto& camera_pub : camera_pubs)
         {
           if (camera_pub.getNumSubscribers() == 0)
@@ -135,7 +136,8 @@ TEST(PanoramicDetector, ReversedRevisitIsReportedWithDirectionMinusOne)
   ASSERT_TRUE(waitFor([&] { return diagnostics.number("frames received") == long(stream.size()); }, 30.0));
   ASSERT_TRUE(waitFor([&] { return diagnostics.number("loop closures") >= 0; }, 5.0));
   ASSERT_TRUE(waitFor(
-      [&] {
+      [&]
+      {
         std::lock_guard<std::mutex> lock(loops_mutex);
         return diagnostics.number("loop closures") == long(loops.size());
       },
@@ -162,9 +164,10 @@ TEST(PanoramicDetector, ReversedRevisitIsReportedWithDirectionMinusOne)
       ++reverse_correct;
     }
   }
-  std::printf("panoramic: %d of %d return-trip frames reported as reverse loops with the right place and shift; "
-              "%d loops elsewhere\n",
-              reverse_correct, kPlaces, other);
+  std::printf(
+      "panoramic: %d of %d return-trip frames reported as reverse loops with the right place and shift; "
+      "%d loops elsewhere\n",
+      reverse_correct, kPlaces, other);
   EXPECT_GE(double(reverse_correct) / kPlaces, min_reverse_fraction);
   EXPECT_EQ(other, 0);
 }

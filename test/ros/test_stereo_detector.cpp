@@ -1,13 +1,13 @@
 // Checker for the stereo detector: the 40 real EuRoC V1_01 pairs through ExactTime give one history entry
 // per pair; a pair whose right image has another size is rejected with a warning and the node stays up.
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+
 #include <fstream>
+#include <mutex>
 #include <sstream>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <mutex>
-#include <rosgraph_msgs/Log.h>
-#include <ros/ros.h>
 
 #include "test_helpers.h"
 
@@ -107,13 +107,13 @@ TEST(StereoDetector, EveryExactPairIsOneHistoryEntryAndMismatchedPairsAreRejecte
   // The node stays up: the next good pair is stored.
   const ros::Time next = later + ros::Duration(0.05);
   left_pub.publish(openable_ros_test::toMsg(left, enc::MONO8, next, "cam0"));
-  right_pub.publish(
-      openable_ros_test::toMsg(cv::imread(dir + "/cam1/data/" + frames[0].second, cv::IMREAD_GRAYSCALE), enc::MONO8,
-                               next, "cam1"));
+  right_pub.publish(openable_ros_test::toMsg(cv::imread(dir + "/cam1/data/" + frames[0].second, cv::IMREAD_GRAYSCALE),
+                                             enc::MONO8, next, "cam1"));
   EXPECT_TRUE(waitFor([&] { return diagnostics.number("history size") == 41; }, 10.0));
   // Pairs were described with D-LDB (disparity from SGBM): the describe latency is reported.
   EXPECT_GT(std::stod(diagnostics.value("describe latency mean (ms)")), 0.0);
-  EXPECT_TRUE(warned("/left/image_rect' is 752x480", "/right/image_rect' is 376x240")) << "the size mismatch was not named";
+  EXPECT_TRUE(warned("/left/image_rect' is 752x480", "/right/image_rect' is 376x240"))
+      << "the size mismatch was not named";
 
   // Only left images (the right camera died): after ~sync_warning_timeout a warning names both topics.
   ros::Time alone = next;
@@ -130,9 +130,8 @@ TEST(StereoDetector, EveryExactPairIsOneHistoryEntryAndMismatchedPairsAreRejecte
   // A stamp before the previous one with ~reset_on_time_jump (the .test sets it): a new history.
   const ros::Time restart = frames.front().first;
   left_pub.publish(openable_ros_test::toMsg(left, enc::MONO8, restart, "cam0"));
-  right_pub.publish(
-      openable_ros_test::toMsg(cv::imread(dir + "/cam1/data/" + frames[0].second, cv::IMREAD_GRAYSCALE), enc::MONO8,
-                               restart, "cam1"));
+  right_pub.publish(openable_ros_test::toMsg(cv::imread(dir + "/cam1/data/" + frames[0].second, cv::IMREAD_GRAYSCALE),
+                                             enc::MONO8, restart, "cam1"));
   EXPECT_TRUE(waitFor([&] { return diagnostics.number("history size") == 1; }, 10.0))
       << "history size " << diagnostics.value("history size") << " after a time jump with ~reset_on_time_jump";
 }

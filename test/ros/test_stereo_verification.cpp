@@ -4,18 +4,18 @@
 // still for the first pairs: those are rejected as identical images (no geometry) and not published; the
 // others must carry a verified metric relative pose (stereo PnP) of a few centimetres and a covariance.
 // Measured: 9 verified, 27 rejected as identical.
-#include <cmath>
-#include <fstream>
-#include <mutex>
-#include <sstream>
-#include <vector>
-
 #include <gtest/gtest.h>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/imgproc.hpp>
 #include <openable_ros/LoopClosure.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
+
+#include <cmath>
+#include <fstream>
+#include <mutex>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <vector>
 
 #include "test_helpers.h"
 
@@ -99,8 +99,8 @@ sensor_msgs::CameraInfo toInfo(const cv::Mat& p, const cv::Size& size, const ros
   {
     info.P[size_t(i)] = p.at<double>(i / 4, i % 4);
   }
-  info.K = { p.at<double>(0, 0), 0, p.at<double>(0, 2), 0, p.at<double>(1, 1), p.at<double>(1, 2), 0, 0, 1 };
-  info.R = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
+  info.K = {p.at<double>(0, 0), 0, p.at<double>(0, 2), 0, p.at<double>(1, 1), p.at<double>(1, 2), 0, 0, 1};
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   return info;
 }
 }  // namespace
@@ -119,7 +119,8 @@ TEST(StereoVerification, LoopsCarryAVerifiedMetricRelativePose)
   ros::Publisher right_info_pub = nh.advertise<sensor_msgs::CameraInfo>("right/camera_info", 50);
   ros::Subscriber sub = nh.subscribe("loop_closures", 100, loopCallback);
   ASSERT_TRUE(waitFor(
-      [&] {
+      [&]
+      {
         return left_pub.getNumSubscribers() > 0 && right_pub.getNumSubscribers() > 0 &&
                left_info_pub.getNumSubscribers() > 0 && right_info_pub.getNumSubscribers() > 0;
       },
@@ -141,7 +142,8 @@ TEST(StereoVerification, LoopsCarryAVerifiedMetricRelativePose)
 
   // The calibration first: the verifier is built from it, so that every pair gets features.
   ASSERT_TRUE(waitFor(
-      [&] {
+      [&]
+      {
         left_info_pub.publish(toInfo(p1, size, ros::Time(1.0), "cam0_rect"));
         right_info_pub.publish(toInfo(p2, size, ros::Time(1.0), "cam1_rect"));
         ros::WallDuration(0.2).sleep();
@@ -182,7 +184,8 @@ TEST(StereoVerification, LoopsCarryAVerifiedMetricRelativePose)
   ASSERT_TRUE(waitFor([&] { return diagnostics.number("frames received") == 40; }, 30.0));
   ASSERT_TRUE(waitFor([&] { return diagnostics.value("verification") == "on"; }, 5.0));
   ASSERT_TRUE(waitFor(
-      [&] {
+      [&]
+      {
         std::lock_guard<std::mutex> lock(mutex);
         return diagnostics.number("loop closures") == long(loops.size());
       },
@@ -207,10 +210,11 @@ TEST(StereoVerification, LoopsCarryAVerifiedMetricRelativePose)
     EXPECT_GT(loop->relative_pose.covariance[0], 0.0);
     EXPECT_GT(loop->relative_pose.covariance[35], 0.0);
   }
-  std::printf("stereo verification: %d verified and %d unverified loop closures of 39 possible; rejected as "
-              "identical images %ld, accepted %ld\n",
-              verified, unverified, diagnostics.number("verification: identical images"),
-              diagnostics.number("verification: accepted"));
+  std::printf(
+      "stereo verification: %d verified and %d unverified loop closures of 39 possible; rejected as "
+      "identical images %ld, accepted %ld\n",
+      verified, unverified, diagnostics.number("verification: identical images"),
+      diagnostics.number("verification: accepted"));
   EXPECT_EQ(unverified, 0);
   EXPECT_GE(verified, min_verified);
 }
