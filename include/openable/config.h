@@ -23,7 +23,8 @@ struct Config
 
   // Matching.
   int sequence_length = 1;          ///< L: a place is the sequence of the last L frames
-  double threshold = -1.0;          ///< accept a loop when the normalised distance is <= threshold; -1 = off
+  int min_sequence_length = 1;      ///< sequences with fewer frames are not candidates (0 = only full, L, sequences)
+  double threshold = -1.0;          ///< accept a loop when the normalised distance is <= threshold; -1 = no gate
   int exclusion_window = 50;        ///< loop-closure mode: the last N frames before the current one are never matched
   int top_k = 5;                    ///< candidates reported per frame
   double min_uniqueness = 0.0;      ///< accept only when 1 - best/second best >= this (0 = off)

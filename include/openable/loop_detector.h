@@ -29,7 +29,8 @@ struct Detection
   Candidate best;
   std::vector<Candidate> top;   ///< up to top_k distinct places, best first
   float uniqueness = 0.0f;      ///< 1 - best / second best (second best outside uniqueness_window); 1 without rival
-  bool accepted = false;        ///< best.distance <= threshold and uniqueness >= min_uniqueness
+  bool accepted = false;        ///< distance <= threshold (if set) and uniqueness >= min_uniqueness (if set);
+                                ///< false when neither gate is set
 };
 
 /// Adds frames, matches them and decides. Two modes:
@@ -71,7 +72,7 @@ public:
   void lastRow(std::vector<float>& out) const;
 
   /// Changes what can change without touching the descriptors: threshold, sequence_length (restarts
-  /// sequences), exclusion_window, top_k, min_uniqueness, uniqueness_window, bidirectional, color_map.
+  /// sequences), min_sequence_length, exclusion_window, top_k, min_uniqueness, uniqueness_window, bidirectional, color_map.
   /// Throws Error when the new config is invalid or changes a descriptor key.
   void updateMatching(const Config& config);
   /// Forgets the stream (loop-closure mode: the whole history; localisation mode: the query sequences).
@@ -80,6 +81,7 @@ public:
 private:
   Candidate candidateAt(size_t column) const;
   size_t candidateColumns() const;
+  int minTerms() const;
 
   Config config_;
   bool localisation_;

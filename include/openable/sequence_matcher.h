@@ -80,9 +80,10 @@ public:
   /// Mean term of the sequence in `column` divided by the largest frame distance: 0 = identical,
   /// 1 = every bit different. With bidirectional matching, the smaller of the two directions; `direction`
   /// (optional) receives +1 (same direction) or -1 (reverse).
-  float normalized(size_t column, int* direction = nullptr) const;
+  /// Sequences of fewer than `min_terms` frames are left out (NaN when neither direction has enough).
+  float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const;
   /// normalized() for every column.
-  void normalizedRow(std::vector<float>& out, std::vector<int8_t>* directions = nullptr) const;
+  void normalizedRow(std::vector<float>& out, std::vector<int8_t>* directions = nullptr, int min_terms = 1) const;
 
 private:
   struct Chains

@@ -133,7 +133,10 @@ const std::vector<KeyAccess>& table()
             &Config::patch_normalization),
     makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor),
     makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length),
-    makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = off", &Config::threshold),
+    makeKey("min_sequence_length", "sequences of fewer frames are never candidates; 0 = only full sequences of "
+                                   "sequence_length frames (1 = any, the mean of the available terms)",
+            &Config::min_sequence_length),
+    makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = no distance gate", &Config::threshold),
     makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
             &Config::exclusion_window),
     makeKey("top_k", "candidates reported per frame", &Config::top_k),
@@ -243,6 +246,7 @@ std::vector<std::string> Config::validate() const
   else if (descriptor == "D-LDB" && camera_type != "stereo")
     bad("descriptor", descriptor, "a mono descriptor (D-LDB needs camera_type stereo)");
   inRange("sequence_length", sequence_length, 1, 10000);
+  inRange("min_sequence_length", min_sequence_length, 0, sequence_length);
   if (!std::isfinite(threshold) || !(threshold == -1.0 || (threshold >= 0.0 && threshold <= 1.0)))
     bad("threshold", formatDouble(threshold), "-1 (off) or a number in [0, 1]");
   inRange("exclusion_window", exclusion_window, 0, 100000000);

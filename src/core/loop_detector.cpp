@@ -43,6 +43,11 @@ LoopDetector::LoopDetector(const Config& config, PlaceDatabase reference_map)
                 "panoramas or camera_type differ)");
 }
 
+int LoopDetector::minTerms() const
+{
+  return config_.min_sequence_length == 0 ? config_.sequence_length : config_.min_sequence_length;
+}
+
 size_t LoopDetector::candidateColumns() const
 {
   if (localisation_)
@@ -55,7 +60,7 @@ Candidate LoopDetector::candidateAt(size_t column) const
 {
   Candidate c;
   int direction = 1;
-  c.distance = matcher_.normalized(column, &direction);
+  c.distance = matcher_.normalized(column, &direction, minTerms());
   c.direction = static_cast<int8_t>(direction);
   c.id = matcher_.firstId() + column;
   c.position = static_cast<size_t>(c.id - database_.firstId());
@@ -81,7 +86,7 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
 
   // Top-k distinct places: repeatedly the smallest distance outside the windows of those already taken.
   std::vector<float> row;
-  matcher_.normalizedRow(row);
+  matcher_.normalizedRow(row, nullptr, minTerms());
   const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
   const long window = config_.uniqueness_window;
   std::vector<size_t> taken;
@@ -109,10 +114,12 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
       detection.uniqueness = 1.0f;
     else
     {
-      const float second = matcher_.normalized(taken[1]);
+      const float second = matcher_.normalized(taken[1], nullptr, minTerms());
       detection.uniqueness = second > 0.0f ? 1.0f - detection.best.distance / second : 0.0f;
     }
-    detection.accepted = config_.threshold >= 0.0 && detection.best.distance <= config_.threshold &&
+    // At least one gate must be on: with neither a threshold nor a uniqueness bound, nothing is accepted.
+    const bool gated = config_.threshold >= 0.0 || config_.min_uniqueness > 0.0;
+    detection.accepted = gated && (config_.threshold < 0.0 || detection.best.distance <= config_.threshold) &&
                          detection.uniqueness >= config_.min_uniqueness;
   }
 
@@ -133,7 +140,7 @@ void LoopDetector::lastRow(std::vector<float>& out) const
       continue;  // evicted after matching
     const size_t position = static_cast<size_t>(id - database_.firstId());
     if (position < out.size())
-      out[position] = matcher_.normalized(c);
+      out[position] = matcher_.normalized(c, nullptr, minTerms());
   }
 }
 

@@ -233,16 +233,17 @@ void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t colu
   std::swap(reverse_, next_);
 }
 
-float SequenceMatcher::normalized(size_t column, int* direction) const
+float SequenceMatcher::normalized(size_t column, int* direction, int min_terms) const
 {
   const double max_distance = double(metric_.layout().maxFrameDistance());
+  const int needed = std::max(1, min_terms);
   const uint16_t n = forward_.count[column];
-  float best = n ? static_cast<float>(forward_.sum[column] / (n * max_distance)) : std::nanf("");
+  float best = n >= needed ? static_cast<float>(forward_.sum[column] / (n * max_distance)) : std::nanf("");
   int dir = 1;
   if (bidirectional_)
   {
     const uint16_t r = reverse_.count[column];
-    if (r)
+    if (r >= needed)
     {
       const float reverse = static_cast<float>(reverse_.sum[column] / (r * max_distance));
       if (!(reverse >= best))  // also when best is NaN
@@ -257,7 +258,7 @@ float SequenceMatcher::normalized(size_t column, int* direction) const
   return best;
 }
 
-void SequenceMatcher::normalizedRow(std::vector<float>& out, std::vector<int8_t>* directions) const
+void SequenceMatcher::normalizedRow(std::vector<float>& out, std::vector<int8_t>* directions, int min_terms) const
 {
   out.resize(columns());
   if (directions)
@@ -265,7 +266,7 @@ void SequenceMatcher::normalizedRow(std::vector<float>& out, std::vector<int8_t>
   for (size_t c = 0; c < columns(); ++c)
   {
     int dir = 1;
-    out[c] = normalized(c, &dir);
+    out[c] = normalized(c, &dir, min_terms);
     if (directions)
       (*directions)[c] = static_cast<int8_t>(dir);
   }

@@ -164,3 +164,57 @@ TEST(LoopDetector, WrongDescriptorSizeIsAClearError)
   LoopDetector detector{ Config() };
   EXPECT_THROW(detector.process(FrameDescriptor(3)), Error);
 }
+
+TEST(LoopDetector, MinSequenceLengthLeavesPartialSequencesOut)
+{
+  Config c;
+  c.sequence_length = 4;
+  c.min_sequence_length = 0;  // only full sequences
+  std::mt19937_64 rng(30);
+  PlaceDatabase map(FrameDescriber(c).layout());
+  std::vector<FrameDescriptor> places;
+  for (int i = 0; i < 20; ++i)
+  {
+    places.push_back(openable_test::randomWords(rng, 22));
+    map.add(places.back());
+  }
+  LoopDetector detector(c, map);
+  std::vector<float> row;
+  for (int i = 0; i < 3; ++i)  // the first L - 1 queries have no full sequence anywhere
+  {
+    EXPECT_FALSE(detector.process(places[i]).has_candidates) << i;
+    detector.lastRow(row);
+    for (float v : row)
+      EXPECT_TRUE(std::isnan(v));
+  }
+  const Detection d = detector.process(places[3]);
+  ASSERT_TRUE(d.has_candidates);
+  EXPECT_EQ(d.best.id, 3u);
+  EXPECT_EQ(d.best.sequence_length, 4);
+  detector.lastRow(row);
+  for (int j = 0; j < 3; ++j)  // reference columns 0..2 cannot hold 4 terms
+    EXPECT_TRUE(std::isnan(row[j])) << j;
+  EXPECT_FALSE(std::isnan(row[3]));
+}
+
+TEST(LoopDetector, AcceptanceNeedsAtLeastOneGateAndEverySetGate)
+{
+  const auto frames = revisitingStream();
+  auto acceptedAt70 = [&frames](double threshold, double min_uniqueness) {
+    Config c;
+    c.sequence_length = 5;
+    c.exclusion_window = 20;
+    c.threshold = threshold;
+    c.min_uniqueness = min_uniqueness;
+    LoopDetector detector(c);
+    Detection d;
+    for (int i = 0; i <= 70; ++i)
+      d = detector.process(frames[i]);
+    return d.accepted;
+  };
+  EXPECT_FALSE(acceptedAt70(-1, 0.0));   // no gate: nothing is accepted
+  EXPECT_TRUE(acceptedAt70(0.2, 0.0));   // distance gate only
+  EXPECT_TRUE(acceptedAt70(-1, 0.5));    // uniqueness gate only (a revisit is very unique)
+  EXPECT_FALSE(acceptedAt70(0.001, 0.5));  // both set: the distance gate fails
+  EXPECT_FALSE(acceptedAt70(-1, 0.999));   // uniqueness gate fails
+}

@@ -132,11 +132,12 @@ TEST(RecommendedConfigs, NordlandSummerToWinterSecondHalf)
   const Outcome all = localise(config, summer, winter, 1, false);
   RecordProperty("recall_at_1_masked", std::to_string(masked.recall()));
   RecordProperty("recall_at_1_all", std::to_string(all.recall()));
-  // openable_offline + openable_eval on the same frames with config/nordland.yaml: recall@1 0.9493
-  // (824 of 868) with near-black queries masked (--mask-dark), 0.9511 (856 of 900) over all queries.
-  // Every miss is a match to one of the first L - 1 reference frames, whose partial sequences
-  // compete with full ones (doc/results.md).
+  // Measured with config/nordland.yaml (min_sequence_length 0: only full sequences of 50 frames are
+  // candidates): recall@1 0.9435 (819 of 868) with near-black queries masked, 0.9456 (851 of 900) over all
+  // queries. The first 49 queries have no full sequence yet and count as misses; every query after them
+  // is matched correctly, and no partial sequence at the start of the map can win any more (with
+  // partial sequences allowed, those were the 44 misses: doc/results.md).
   EXPECT_EQ(masked.evaluated, 868);
-  EXPECT_GE(masked.recall(), 0.949);
-  EXPECT_GE(all.recall(), 0.951);
+  EXPECT_GE(masked.recall(), 0.943);
+  EXPECT_GE(all.recall(), 0.945);
 }
