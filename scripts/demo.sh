@@ -12,7 +12,7 @@ echo "openable_ros demo: Gardens Point day (map) vs night (query), 200 + 200 rea
   --reference "$root/data/sample/day_right" --query "$root/data/sample/night_right" \
   --output "$out" --ground-truth-tolerance 2
 echo
-echo "first loop closures (query frame, matched map frame, normalised distance):"
+echo "first accepted loop closures (query frame, matched map frame, normalised distance):"
 head -n 6 "$out/loop_closures.csv" | column -t -s,
 echo
-echo "look at: $out/distance_matrix.png (the diagonal is the true match) and $out/distance_matrix_thresholded.png"
+echo "look at: $out/distance_matrix.png (the dark diagonal: each night frame matched with its day twin)"

@@ -278,7 +278,10 @@ int run(const Options& options)
   std::ostringstream csv;
   const bool panoramic = config.camera_type == "panoramic";
   csv << "query,match,distance" << (panoramic ? ",direction,shift" : "") << "\n";
-  size_t matches = 0, truth_checked = 0, truth_hits = 0;
+  size_t matches = 0, truth_checked = 0, truth_hits = 0, matches_correct = 0;
+  // With a threshold or a uniqueness bound, only accepted loop closures are listed; with neither, every
+  // frame's best match.
+  const bool gated = config.threshold >= 0 || config.min_uniqueness > 0;
   std::vector<float> row;
   std::vector<long> stream_file_of;  // loop-closure mode: database position -> file index
   for (long file = 0; stream->next(descriptor, name, described, timings); ++file)
@@ -306,9 +309,10 @@ int run(const Options& options)
       ++truth_checked;
       truth_hits += std::labs(match - file) <= options.ground_truth_tolerance ? 1 : 0;
     }
-    if (config.threshold >= 0 && !d.accepted)
+    if (gated && !d.accepted)
       continue;
     ++matches;
+    matches_correct += std::labs(match - file) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
     csv << file << "," << match << "," << std::setprecision(6) << d.best.distance;
     if (panoramic)
       csv << "," << int(d.best.direction) << "," << d.best.shift;
@@ -339,12 +343,17 @@ int run(const Options& options)
   std::cout << "mode: " << (localisation ? "localisation (query vs reference)" : "loop closure (stream vs its past)")
             << "\n"
             << "frames: " << rows << " x " << columns << " (described " << timings.frames << ")\n"
-            << "matches: " << matches << (config.threshold >= 0 ? " below threshold " : " (no threshold)")
-            << (config.threshold >= 0 ? std::to_string(config.threshold) : "") << "\n";
+            << "matches: " << matches
+            << (gated ? " accepted (threshold " + config.get("threshold") + ", min_uniqueness " +
+                            config.get("min_uniqueness") + ")"
+                      : " (no threshold or uniqueness bound: every frame's best match)")
+            << "\n";
   if (truth_checked)
     std::cout << "best match within " << options.ground_truth_tolerance << " frames of the truth: " << std::fixed
               << std::setprecision(3) << double(truth_hits) / truth_checked << " (" << truth_hits << " of "
-              << truth_checked << ")\n";
+              << truth_checked << ")\n"
+              << "listed matches within " << options.ground_truth_tolerance << " frames of the truth: "
+              << matches_correct << " of " << matches << "\n";
   std::cout << std::fixed << std::setprecision(3) << "time per frame: " << per_frame
             << " ms (preprocess + describe + match, image decoding excluded: " << timings.read / std::max<size_t>(1, timings.frames)
             << " ms)\n"
