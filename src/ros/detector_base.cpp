@@ -174,6 +174,7 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   // (a refused threshold of 5 would otherwise come back clamped to 1 and accept everything).
   pnh.setParam("threshold", config_.threshold);
   pnh.setParam("sequence_length", config_.sequence_length);
+  pnh.setParam("min_sequence_length", config_.min_sequence_length);
   pnh.setParam("exclusion_window", config_.exclusion_window);
   pnh.setParam("top_k", config_.top_k);
   pnh.setParam("min_uniqueness", config_.min_uniqueness);
@@ -893,6 +894,7 @@ void DetectorBase::reconfigure(DetectorConfig& config, uint32_t /*level*/)
   openable::Config next = config_;
   next.threshold = config.threshold;
   next.sequence_length = config.sequence_length;
+  next.min_sequence_length = config.min_sequence_length;
   next.exclusion_window = config.exclusion_window;
   next.top_k = config.top_k;
   next.min_uniqueness = config.min_uniqueness;
@@ -911,6 +913,7 @@ void DetectorBase::reconfigure(DetectorConfig& config, uint32_t /*level*/)
   // Write back what is in force, so rqt_reconfigure shows the truth.
   config.threshold = config_.threshold;
   config.sequence_length = config_.sequence_length;
+  config.min_sequence_length = config_.min_sequence_length;
   config.exclusion_window = config_.exclusion_window;
   config.top_k = config_.top_k;
   config.min_uniqueness = config_.min_uniqueness;
