@@ -12,7 +12,7 @@ packages=(
   python3-sensor-msgs python3-std-msgs python3-geometry-msgs python3-nav-msgs python3-stereo-msgs
   python3-visualization-msgs python3-diagnostic-msgs python3-tf2-msgs python3-std-srvs python3-numpy
   libsensor-msgs-dev libstereo-msgs-dev libnav-msgs-dev libvisualization-msgs-dev libdiagnostic-msgs-dev
-  libgeometry-msgs-dev libstd-srvs-dev libtf2-msgs-dev
+  libgeometry-msgs-dev libstd-srvs-dev libtf2-msgs-dev libdiagnostic-updater-dev
   libopencv-dev libyaml-cpp-dev libeigen3-dev libceres-dev libgtest-dev libbenchmark-dev
 )
 
