@@ -78,7 +78,8 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   sync_warning_timeout_ = readDouble(pnh, "sync_warning_timeout", 5.0, 0.0, 3600.0, "s", warnings);
   session_ = uint32_t(readInt(pnh, "session", 0, 0, 1000000000, warnings));
   const int matrix_size = readInt(pnh, "matrix_size", 512, 16, 4096, warnings);
-  verify_ = readBool(pnh, "verify", false, warnings);
+  // On by default: it only runs once camera_info arrives; until then loops go out unverified.
+  verify_ = readBool(pnh, "verify", true, warnings);
   verify_required_ = readBool(pnh, "verify_required", true, warnings);
   const double verify_memory = readDouble(pnh, "verify_memory", 256.0, 1.0, 65536.0, "MB", warnings);
   features_ = openable::FeatureStore(size_t(verify_memory * 1024.0 * 1024.0));
