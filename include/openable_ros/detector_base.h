@@ -141,6 +141,8 @@ private:
   void publishMarkersLocked(const std_msgs::Header& header, bool force);
   void resetStreamLocked();
   void reconfigure(DetectorConfig& config, uint32_t level);
+  /// Why a save/load request for `path` cannot run (empty when it can).
+  std::string mapServiceRefusal(const std::string& path) const;
   bool saveMap(SaveMap::Request& request, SaveMap::Response& response);
   bool loadMap(LoadMap::Request& request, LoadMap::Response& response);
   bool reset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);

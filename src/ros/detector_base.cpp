@@ -804,20 +804,23 @@ bool DetectorBase::loadMapLocked(const std::string& path, std::string& message)
   return true;
 }
 
+std::string DetectorBase::mapServiceRefusal(const std::string& path) const
+{
+  if (!ready_)
+    return "the detector is not running (see the start-up errors)";
+  if (path.empty())
+    return "no path given and ~map_file is empty";
+  return "";
+}
+
 bool DetectorBase::saveMap(SaveMap::Request& request, SaveMap::Response& response)
 {
   std::lock_guard<std::mutex> lock(mutex_);
   const std::string path = request.path.empty() ? map_file_ : request.path;
-  if (!ready_)
+  response.message = mapServiceRefusal(path);
+  if (!response.message.empty())
   {
     response.success = false;
-    response.message = "the detector is not running (see the start-up errors)";
-    return true;
-  }
-  if (path.empty())
-  {
-    response.success = false;
-    response.message = "no path given and ~map_file is empty";
     return true;
   }
   try
@@ -841,16 +844,10 @@ bool DetectorBase::loadMap(LoadMap::Request& request, LoadMap::Response& respons
 {
   std::lock_guard<std::mutex> lock(mutex_);
   const std::string path = request.path.empty() ? map_file_ : request.path;
-  if (!ready_)
+  response.message = mapServiceRefusal(path);
+  if (!response.message.empty())
   {
     response.success = false;
-    response.message = "the detector is not running (see the start-up errors)";
-    return true;
-  }
-  if (path.empty())
-  {
-    response.success = false;
-    response.message = "no path given and ~map_file is empty";
     return true;
   }
   std::string message;
