@@ -1,28 +1,26 @@
 // kitti_to_bag end to end: the real KITTI 07 files (first 160 frames) -> bag, read back with the rosbag
 // API; broken folders give clear errors. No master needed.
 #include <gtest/gtest.h>
-
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sys/wait.h>
+#include <tf2_msgs/TFMessage.h>
 #include <unistd.h>
 
+#include <boost/foreach.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <boost/foreach.hpp>
-#include <nav_msgs/Odometry.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-#include <rosbag/bag.h>
-#include <rosbag/view.h>
-#include <sensor_msgs/CameraInfo.h>
-#include <sensor_msgs/Image.h>
-#include <tf2_msgs/TFMessage.h>
 
 namespace fs = std::filesystem;
 
@@ -182,7 +180,7 @@ TEST_F(KittiToBag, StereoPosesRangeAndCompression)
   const std::string sequence = fixture("stereo", true, true, true, true);
   const std::string bag_path = dir_ + "/stereo.bag";
   const ToolRun r = run("--sequence " + sequence + " --output " + bag_path + " --stereo --poses " + poses +
-                    " --first 10 --last 19 --compression lz4");
+                        " --first 10 --last 19 --compression lz4");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto times = readTimes(kSequence + "/times.txt");
 
@@ -240,7 +238,8 @@ TEST_F(KittiToBag, StereoPosesRangeAndCompression)
     EXPECT_NEAR(odom->pose.pose.position.z, -p[7], 1e-9);
     // Optical axis: rotate (0 0 1) by the quaternion and compare with body_from_optical * (r02 r12 r22).
     const auto& q = odom->pose.pose.orientation;
-    const double zx = 2 * (q.x * q.z + q.w * q.y), zy = 2 * (q.y * q.z - q.w * q.x), zz = 1 - 2 * (q.x * q.x + q.y * q.y);
+    const double zx = 2 * (q.x * q.z + q.w * q.y), zy = 2 * (q.y * q.z - q.w * q.x),
+                 zz = 1 - 2 * (q.x * q.x + q.y * q.y);
     // KITTI's rotations are printed with 7 digits, not exactly orthonormal: 1e-6, not 1e-9.
     EXPECT_NEAR(zx, p[10], 1e-6);
     EXPECT_NEAR(zy, -p[2], 1e-6);
@@ -267,11 +266,13 @@ TEST_F(KittiToBag, NotAKittiFolderSaysWhatIsMissing)
   EXPECT_EQ(no_calib.status, 1);
   EXPECT_NE(no_calib.output.find("calib.txt (projection matrices"), std::string::npos) << no_calib.output;
 
-  const ToolRun no_right = run("--sequence " + fixture("mono_only", true, true, true) + " --output " + dir_ + "/x.bag --stereo");
+  const ToolRun no_right =
+      run("--sequence " + fixture("mono_only", true, true, true) + " --output " + dir_ + "/x.bag --stereo");
   EXPECT_EQ(no_right.status, 1);
   EXPECT_NE(no_right.output.find("image_1/ (right images, needed by --stereo)"), std::string::npos) << no_right.output;
 
-  const ToolRun colour = run("--sequence " + fixture("grey_only", true, true, true) + " --output " + dir_ + "/x.bag --color");
+  const ToolRun colour =
+      run("--sequence " + fixture("grey_only", true, true, true) + " --output " + dir_ + "/x.bag --color");
   EXPECT_EQ(colour.status, 1);
   EXPECT_NE(colour.output.find("image_2/"), std::string::npos) << colour.output;
 }

@@ -3,7 +3,12 @@
 // carry the true relative pose; the corrected path must be much closer to the ground truth than the drifted
 // odometry. Wrong loops, a loop whose stamps match no keyframe and out-of-order odometry are sent as well.
 #include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -11,12 +16,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <nav_msgs/Odometry.h>
-#include <nav_msgs/Path.h>
-#include <ros/ros.h>
-#include <visualization_msgs/MarkerArray.h>
 
 #include "openable_ros/LoopClosure.h"
 
@@ -122,7 +121,7 @@ TEST_F(PoseGraphNodeTest, Kitti06DriftCorrectedByLoops)
 
   // Odometry with drift: 0.03 deg/frame yaw bias, 1 % scale, white noise.
   std::mt19937 engine(6);
-  std::vector<Eigen::Isometry3d> odometry{ truth[0] };
+  std::vector<Eigen::Isometry3d> odometry{truth[0]};
   for (size_t k = 0; k + 1 < truth.size(); ++k)
   {
     Eigen::Isometry3d rel = truth[k].inverse() * truth[k + 1];
@@ -152,7 +151,8 @@ TEST_F(PoseGraphNodeTest, Kitti06DriftCorrectedByLoops)
     }
   }
   std::multimap<int, openable_ros::LoopClosure> loops_after;  // published after the query frame's odometry
-  const auto makeLoop = [&](int query, int match, const Eigen::Isometry3d& relative) {
+  const auto makeLoop = [&](int query, int match, const Eigen::Isometry3d& relative)
+  {
     openable_ros::LoopClosure l;
     l.header.stamp = stamp(query);
     l.header.frame_id = "camera_left";
@@ -174,7 +174,7 @@ TEST_F(PoseGraphNodeTest, Kitti06DriftCorrectedByLoops)
       ++true_loops;
     }
   // Three wrong loops (40+ m apart, claimed identical) after all true ones.
-  for (int q : { 900, 980, 1060 })
+  for (int q : {900, 980, 1060})
     loops_after.emplace(1100, makeLoop(q - 1, q - 600, Eigen::Isometry3d::Identity()));
   // A loop whose stamps match no keyframe (before any odometry).
   openable_ros::LoopClosure unmatched = makeLoop(500, 400, Eigen::Isometry3d::Identity());
@@ -182,7 +182,8 @@ TEST_F(PoseGraphNodeTest, Kitti06DriftCorrectedByLoops)
   unmatched.match_stamp = ros::Time(4e8);
   loops_after.emplace(600, unmatched);
 
-  ASSERT_TRUE(waitFor([this]() { return odom_pub_.getNumSubscribers() > 0 && loop_pub_.getNumSubscribers() > 0; }, 20.0))
+  ASSERT_TRUE(
+      waitFor([this]() { return odom_pub_.getNumSubscribers() > 0 && loop_pub_.getNumSubscribers() > 0; }, 20.0))
       << "pose_graph_node did not subscribe to odom and loop_closures";
   ros::Rate rate(400.0);
   for (size_t k = 0; k < truth.size() && ros::ok(); ++k)
@@ -236,9 +237,10 @@ TEST_F(PoseGraphNodeTest, Kitti06DriftCorrectedByLoops)
   size_t red = 0;
   for (const auto& c : markers_->markers[0].colors)
     red += c.r > 0.5f ? 1 : 0;
-  std::printf("pose_graph_node: %zu keyframes, %d true + 3 wrong loops; ATE drifted %.3f m, corrected %.3f m "
-              "(factor %.1f); %zu loop ends drawn red (down-weighted)\n",
-              count, true_loops, drifted, corrected, drifted / corrected, red);
+  std::printf(
+      "pose_graph_node: %zu keyframes, %d true + 3 wrong loops; ATE drifted %.3f m, corrected %.3f m "
+      "(factor %.1f); %zu loop ends drawn red (down-weighted)\n",
+      count, true_loops, drifted, corrected, drifted / corrected, red);
   EXPECT_GT(count, 900u);
   EXPECT_EQ(path_->header.frame_id, "map");
   // Measured: 920 keyframes, ATE drifted 47.74 m, corrected 2.86 m (factor 16.7).

@@ -22,15 +22,15 @@ struct Config
   std::string descriptor = "LDB";           ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG
 
   // Matching.
-  int sequence_length = 1;          ///< L: a place is the sequence of the last L frames
-  int min_sequence_length = 1;      ///< sequences with fewer frames are not candidates (0 = only full, L, sequences)
-  double threshold = -1.0;          ///< accept a loop when the normalised distance is <= threshold; -1 = no gate
-  int exclusion_window = 50;        ///< loop-closure mode: the last N frames before the current one are never matched
-  int top_k = 5;                    ///< candidates reported per frame
-  double min_uniqueness = 0.0;      ///< accept only when 1 - best/second best >= this (0 = off)
-  int uniqueness_window = 10;       ///< frames around the best match ignored when looking for the second best
-  bool bidirectional = false;       ///< also match sequences driven in the opposite direction
-  int max_history = 0;              ///< frames kept in the loop-closure history (0 = unbounded)
+  int sequence_length = 1;      ///< L: a place is the sequence of the last L frames
+  int min_sequence_length = 1;  ///< sequences with fewer frames are not candidates (0 = only full, L, sequences)
+  double threshold = -1.0;      ///< accept a loop when the normalised distance is <= threshold; -1 = no gate
+  int exclusion_window = 50;    ///< loop-closure mode: the last N frames before the current one are never matched
+  int top_k = 5;                ///< candidates reported per frame
+  double min_uniqueness = 0.0;  ///< accept only when 1 - best/second best >= this (0 = off)
+  int uniqueness_window = 10;   ///< frames around the best match ignored when looking for the second best
+  bool bidirectional = false;   ///< also match sequences driven in the opposite direction
+  int max_history = 0;          ///< frames kept in the loop-closure history (0 = unbounded)
 
   // Stereo (camera_type stereo): OpenCV StereoSGBM on the rectified pair, scaled to the input width.
   int stereo_num_disparities = 64;  ///< disparity search range at 640 px width (multiple of 16 after scaling)

@@ -1,11 +1,10 @@
 #pragma once
 
 #include <cstdint>
-#include <string>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
+#include <string>
+#include <vector>
 
 #include "openable/descriptor.h"
 #include "openable/ldb.h"

@@ -10,9 +10,7 @@ namespace openable
 class Error : public std::runtime_error
 {
 public:
-  explicit Error(const std::string& what) : std::runtime_error(what)
-  {
-  }
+  explicit Error(const std::string& what) : std::runtime_error(what) {}
 };
 
 }  // namespace openable

@@ -3,11 +3,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <opencv2/core.hpp>
 #include <string>
 #include <unordered_map>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace openable
 {
@@ -37,21 +36,22 @@ struct PinholeCamera
 /// Every tunable of the verification, with the defaults used by the nodelets.
 struct VerifierParams
 {
-  int max_features = 1000;         ///< ORB features per frame (the bound on per-frame memory)
-  double ratio = 0.8;              ///< Lowe ratio test: best / second-best Hamming distance must be below this
-  int max_hamming = 64;            ///< a match with more differing bits (of 256) is discarded
-  int min_inliers = 30;            ///< fewer RANSAC inliers -> rejected
+  int max_features = 1000;           ///< ORB features per frame (the bound on per-frame memory)
+  double ratio = 0.8;                ///< Lowe ratio test: best / second-best Hamming distance must be below this
+  int max_hamming = 64;              ///< a match with more differing bits (of 256) is discarded
+  int min_inliers = 30;              ///< fewer RANSAC inliers -> rejected
   double ransac_threshold_px = 2.0;  ///< inlier threshold: reprojection (PnP) or Sampson (mono) error, pixels
   double ransac_confidence = 0.999;
-  int ransac_iterations = 2000;    ///< PnP RANSAC iterations
-  double min_parallax_deg = 2.0;   ///< mono: median parallax after derotation below this -> pure rotation / too little baseline
+  int ransac_iterations = 2000;  ///< PnP RANSAC iterations
+  double min_parallax_deg =
+      2.0;  ///< mono: median parallax after derotation below this -> pure rotation / too little baseline
   double identical_max_flow_px = 0.5;  ///< median inlier motion below this -> identical images (rejected)
   // Stereo depth of the keypoints (left/right ORB matched along the rectified row).
-  double stereo_max_row_diff_px = 2.0;  ///< |y_left - y_right| allowed at octave 0 (scaled with the octave)
+  double stereo_max_row_diff_px = 2.0;   ///< |y_left - y_right| allowed at octave 0 (scaled with the octave)
   double stereo_min_disparity_px = 1.0;  ///< smaller disparity (too far, depth unreliable) -> no depth
   double stereo_max_disparity_px = 160.0;
-  int stereo_max_hamming = 50;     ///< left/right descriptor distance allowed
-  int min_stereo_points = 30;      ///< stereo: fewer match-frame keypoints with depth -> rejected
+  int stereo_max_hamming = 50;  ///< left/right descriptor distance allowed
+  int min_stereo_points = 30;   ///< stereo: fewer match-frame keypoints with depth -> rejected
 
   /// Human-readable errors ("name: value x, expected ..."); empty when valid.
   std::vector<std::string> validate() const;
@@ -62,7 +62,7 @@ struct FrameFeatures
 {
   uint64_t id = 0;
   std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors;              ///< ORB, CV_8U, one 32-byte row per keypoint
+  cv::Mat descriptors;  ///< ORB, CV_8U, one 32-byte row per keypoint
   /// Stereo: per keypoint, the 3D point in this (left, rectified) camera's frame, metres; z = NaN without depth.
   /// Empty for mono frames.
   std::vector<cv::Point3f> points;
@@ -119,13 +119,13 @@ private:
 enum class VerificationStatus
 {
   Accepted,
-  TooFewFeatures,     ///< a frame has fewer keypoints than min_inliers
-  TooFewStereoPoints, ///< stereo: the match frame has too few keypoints with depth
-  TooFewMatches,      ///< fewer ratio-test matches than min_inliers
-  TooFewInliers,      ///< RANSAC found fewer than min_inliers consistent matches
-  IdenticalImages,    ///< inliers barely move: the same image twice, geometry is meaningless
-  PureRotation,       ///< mono: no parallax, the translation direction is undefined
-  Failed              ///< the estimator returned no model
+  TooFewFeatures,      ///< a frame has fewer keypoints than min_inliers
+  TooFewStereoPoints,  ///< stereo: the match frame has too few keypoints with depth
+  TooFewMatches,       ///< fewer ratio-test matches than min_inliers
+  TooFewInliers,       ///< RANSAC found fewer than min_inliers consistent matches
+  IdenticalImages,     ///< inliers barely move: the same image twice, geometry is meaningless
+  PureRotation,        ///< mono: no parallax, the translation direction is undefined
+  Failed               ///< the estimator returned no model
 };
 const char* toString(VerificationStatus status);
 
@@ -150,13 +150,13 @@ struct Verification
   static constexpr double kScaleFreeVariance = 1e6;
 
   VerificationStatus status = VerificationStatus::Failed;
-  std::string reason;        ///< empty when accepted; else what failed with the numbers
-  bool metric = false;       ///< true: stereo PnP (metres); false: mono, unit translation
+  std::string reason;   ///< empty when accepted; else what failed with the numbers
+  bool metric = false;  ///< true: stereo PnP (metres); false: mono, unit translation
   int query_features = 0;
   int match_features = 0;
-  int matches = 0;           ///< after the ratio test
+  int matches = 0;  ///< after the ratio test
   int inliers = 0;
-  double rms_error_px = 0.0; ///< inliers' RMS error at the solution
+  double rms_error_px = 0.0;  ///< inliers' RMS error at the solution
   double median_flow_px = 0.0;
   double median_parallax_deg = 0.0;  ///< mono only
   cv::Matx33d rotation = cv::Matx33d::eye();
@@ -199,10 +199,10 @@ public:
 
 private:
   void stereoDepth(const cv::Mat& left_grey, const cv::Mat& right_grey, FrameFeatures& features) const;
-  void verifyStereo(const FrameFeatures& match, const FrameFeatures& query,
-                    const std::vector<cv::DMatch>& matches, Verification& result) const;
-  void verifyMono(const FrameFeatures& match, const FrameFeatures& query,
-                  const std::vector<cv::DMatch>& matches, Verification& result) const;
+  void verifyStereo(const FrameFeatures& match, const FrameFeatures& query, const std::vector<cv::DMatch>& matches,
+                    Verification& result) const;
+  void verifyMono(const FrameFeatures& match, const FrameFeatures& query, const std::vector<cv::DMatch>& matches,
+                  Verification& result) const;
 
   PinholeCamera camera_;
   VerifierParams params_;

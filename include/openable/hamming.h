@@ -28,8 +28,7 @@ uint32_t hamming(const uint64_t* a, const uint64_t* b, size_t words);
 uint32_t hamming(HammingKernel kernel, const uint64_t* a, const uint64_t* b, size_t words);
 
 /// out[i] = hamming(query, rows + i * stride, words) for i < count. Rows are `stride` words apart.
-void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size_t words, size_t count,
-                uint32_t* out);
+void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size_t words, size_t count, uint32_t* out);
 void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* rows, size_t stride, size_t words,
                 size_t count, uint32_t* out);
 

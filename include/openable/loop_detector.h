@@ -13,11 +13,11 @@ namespace openable
 /// One matched reference frame.
 struct Candidate
 {
-  uint64_t id = 0;          ///< global id of the reference frame
-  size_t position = 0;      ///< its position in the database (0 = oldest stored)
-  float distance = 1.0f;    ///< normalised sequence distance in [0, 1], 0 = identical
-  int8_t direction = 1;     ///< +1 same direction, -1 reverse (bidirectional matching)
-  int16_t shift = 0;        ///< circular shift of sub-panoramas that matched best (panoramic)
+  uint64_t id = 0;               ///< global id of the reference frame
+  size_t position = 0;           ///< its position in the database (0 = oldest stored)
+  float distance = 1.0f;         ///< normalised sequence distance in [0, 1], 0 = identical
+  int8_t direction = 1;          ///< +1 same direction, -1 reverse (bidirectional matching)
+  int16_t shift = 0;             ///< circular shift of sub-panoramas that matched best (panoramic)
   uint16_t sequence_length = 0;  ///< terms in the sequence (L, or fewer at the start of a chain)
 };
 
@@ -27,10 +27,10 @@ struct Detection
   uint64_t query_id = 0;
   bool has_candidates = false;  ///< false while nothing can be compared yet (start, exclusion window)
   Candidate best;
-  std::vector<Candidate> top;   ///< up to top_k distinct places, best first
-  float uniqueness = 0.0f;      ///< 1 - best / second best (second best outside uniqueness_window); 1 without rival
-  bool accepted = false;        ///< distance <= threshold (if set) and uniqueness >= min_uniqueness (if set);
-                                ///< false when neither gate is set
+  std::vector<Candidate> top;  ///< up to top_k distinct places, best first
+  float uniqueness = 0.0f;     ///< 1 - best / second best (second best outside uniqueness_window); 1 without rival
+  bool accepted = false;       ///< distance <= threshold (if set) and uniqueness >= min_uniqueness (if set);
+                               ///< false when neither gate is set
 };
 
 /// Adds frames, matches them and decides. Two modes:
@@ -72,8 +72,8 @@ public:
   void lastRow(std::vector<float>& out) const;
 
   /// Changes what can change without touching the descriptors: threshold, sequence_length (restarts
-  /// sequences), min_sequence_length, exclusion_window, top_k, min_uniqueness, uniqueness_window, bidirectional, color_map.
-  /// Throws Error when the new config is invalid or changes a descriptor key.
+  /// sequences), min_sequence_length, exclusion_window, top_k, min_uniqueness, uniqueness_window, bidirectional,
+  /// color_map. Throws Error when the new config is invalid or changes a descriptor key.
   void updateMatching(const Config& config);
   /// Forgets the stream (loop-closure mode: the whole history; localisation mode: the query sequences).
   void reset();

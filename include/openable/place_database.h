@@ -18,7 +18,7 @@ struct FrameInfo
   uint32_t session = 0;   ///< session (traversal) id, for maps recorded over several runs
   std::string source;     ///< file name, topic or anything that names where the frame came from
   bool has_pose = false;  ///< pose of the camera in a fixed frame, when known
-  std::array<double, 7> pose{ { 0, 0, 0, 0, 0, 0, 1 } };  ///< x y z qx qy qz qw
+  std::array<double, 7> pose{{0, 0, 0, 0, 0, 0, 1}};  ///< x y z qx qy qz qw
 };
 
 /// Contiguous, 64-byte aligned descriptor storage (frame after frame, layout.frameWords() words each) with

@@ -1,11 +1,10 @@
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 namespace openable
 {
@@ -14,9 +13,9 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 /// The loss applied to loop-closure edges (odometry edges are always least squares: they are trusted).
 enum class RobustLoss
 {
-  None,    ///< plain least squares: one wrong loop bends the whole trajectory
-  Huber,   ///< quadratic near zero, linear beyond the scale: bounded influence, never zero
-  Cauchy   ///< influence falls off as 1/r: a wrong loop far from the rest is effectively ignored
+  None,   ///< plain least squares: one wrong loop bends the whole trajectory
+  Huber,  ///< quadratic near zero, linear beyond the scale: bounded influence, never zero
+  Cauchy  ///< influence falls off as 1/r: a wrong loop far from the rest is effectively ignored
 };
 
 struct PoseGraphOptions

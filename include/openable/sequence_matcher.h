@@ -102,7 +102,7 @@ private:
   uint64_t first_id_ = 0;
   Chains forward_;
   Chains reverse_;
-  Chains next_;  ///< the next frame's chains are built here, then swapped in (no copy)
+  Chains next_;                   ///< the next frame's chains are built here, then swapped in (no copy)
   std::vector<uint64_t> recent_;  ///< ring of the last L + 1 query descriptors
   std::vector<uint32_t> current_distances_;
   std::vector<uint32_t> dropped_distances_;

@@ -1,12 +1,12 @@
 #include "openable/config.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
 #include <sstream>
-
-#include <yaml-cpp/yaml.h>
 
 #include "openable/descriptor.h"
 #include "openable/error.h"
@@ -87,73 +87,77 @@ KeyAccess makeKey(const char* name, const char* description, T Config::*member);
 template <>
 KeyAccess makeKey<int>(const char* name, const char* description, int Config::*member)
 {
-  return { { name, "int", description },
-           [name, member](Config& c, const std::string& v) { c.*member = parseInt(name, v); },
-           [member](const Config& c) { return std::to_string(c.*member); } };
+  return {{name, "int", description},
+          [name, member](Config& c, const std::string& v) { c.*member = parseInt(name, v); },
+          [member](const Config& c) { return std::to_string(c.*member); }};
 }
 
 template <>
 KeyAccess makeKey<double>(const char* name, const char* description, double Config::*member)
 {
-  return { { name, "double", description },
-           [name, member](Config& c, const std::string& v) { c.*member = parseDouble(name, v); },
-           [member](const Config& c) { return formatDouble(c.*member); } };
+  return {{name, "double", description},
+          [name, member](Config& c, const std::string& v) { c.*member = parseDouble(name, v); },
+          [member](const Config& c) { return formatDouble(c.*member); }};
 }
 
 template <>
 KeyAccess makeKey<bool>(const char* name, const char* description, bool Config::*member)
 {
-  return { { name, "bool", description },
-           [name, member](Config& c, const std::string& v) { c.*member = parseBool(name, v); },
-           [member](const Config& c) { return std::string(c.*member ? "true" : "false"); } };
+  return {{name, "bool", description},
+          [name, member](Config& c, const std::string& v) { c.*member = parseBool(name, v); },
+          [member](const Config& c) { return std::string(c.*member ? "true" : "false"); }};
 }
 
 template <>
 KeyAccess makeKey<std::string>(const char* name, const char* description, std::string Config::*member)
 {
-  return { { name, "string", description },
-           [member](Config& c, const std::string& v) { c.*member = trim(v); },
-           [member](const Config& c) { return c.*member; } };
+  return {{name, "string", description},
+          [member](Config& c, const std::string& v) { c.*member = trim(v); },
+          [member](const Config& c) { return c.*member; }};
 }
 
 const std::vector<KeyAccess>& table()
 {
   static const std::vector<KeyAccess> keys = {
-    makeKey("camera_type", "mono | stereo | panoramic", &Config::camera_type),
-    makeKey("description_type", "global (one descriptor per image) | grid (grid_x x grid_y cells)",
-            &Config::description_type),
-    makeKey("patch_size", "side of the square patch every cell is downsampled to (pixels)", &Config::patch_size),
-    makeKey("grid_x", "cells across, description_type grid", &Config::grid_x),
-    makeKey("grid_y", "cells down, description_type grid", &Config::grid_y),
-    makeKey("panoramas", "vertical sub-panoramas per panorama, camera_type panoramic", &Config::panoramas),
-    makeKey("illumination_invariance", "apply paper Eq. 6 before description (colour input)",
-            &Config::illumination_invariance),
-    makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha),
-    makeKey("patch_normalization", "block side (pixels of the patch) for local contrast normalisation; 0 = off",
-            &Config::patch_normalization),
-    makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor),
-    makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length),
-    makeKey("min_sequence_length", "sequences of fewer frames are never candidates; 0 = only full sequences of "
-                                   "sequence_length frames (1 = any, the mean of the available terms)",
-            &Config::min_sequence_length),
-    makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = no distance gate", &Config::threshold),
-    makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
-            &Config::exclusion_window),
-    makeKey("top_k", "candidates reported per frame", &Config::top_k),
-    makeKey("min_uniqueness", "accept only when 1 - best / second best >= this (0 = off)", &Config::min_uniqueness),
-    makeKey("uniqueness_window", "frames around the best match skipped when finding the second best (frames)",
-            &Config::uniqueness_window),
-    makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional),
-    makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history),
-    makeKey("stereo_num_disparities", "SGBM disparity range at 640 px width (pixels)",
-            &Config::stereo_num_disparities),
-    makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size),
-    makeKey("display_normalization", "distance matrix images: max (paper Eq. 5, M / max M) | minmax (contrast "
-                                     "stretch)",
-            &Config::display_normalization),
-    makeKey("color_map", "distance matrix colour map 0..11 (AUTUMN BONE JET WINTER RAINBOW OCEAN SUMMER SPRING "
-                         "COOL HSV PINK HOT)",
-            &Config::color_map),
+      makeKey("camera_type", "mono | stereo | panoramic", &Config::camera_type),
+      makeKey("description_type", "global (one descriptor per image) | grid (grid_x x grid_y cells)",
+              &Config::description_type),
+      makeKey("patch_size", "side of the square patch every cell is downsampled to (pixels)", &Config::patch_size),
+      makeKey("grid_x", "cells across, description_type grid", &Config::grid_x),
+      makeKey("grid_y", "cells down, description_type grid", &Config::grid_y),
+      makeKey("panoramas", "vertical sub-panoramas per panorama, camera_type panoramic", &Config::panoramas),
+      makeKey("illumination_invariance", "apply paper Eq. 6 before description (colour input)",
+              &Config::illumination_invariance),
+      makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha),
+      makeKey("patch_normalization", "block side (pixels of the patch) for local contrast normalisation; 0 = off",
+              &Config::patch_normalization),
+      makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor),
+      makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length),
+      makeKey("min_sequence_length",
+              "sequences of fewer frames are never candidates; 0 = only full sequences of "
+              "sequence_length frames (1 = any, the mean of the available terms)",
+              &Config::min_sequence_length),
+      makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = no distance gate",
+              &Config::threshold),
+      makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
+              &Config::exclusion_window),
+      makeKey("top_k", "candidates reported per frame", &Config::top_k),
+      makeKey("min_uniqueness", "accept only when 1 - best / second best >= this (0 = off)", &Config::min_uniqueness),
+      makeKey("uniqueness_window", "frames around the best match skipped when finding the second best (frames)",
+              &Config::uniqueness_window),
+      makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional),
+      makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history),
+      makeKey("stereo_num_disparities", "SGBM disparity range at 640 px width (pixels)",
+              &Config::stereo_num_disparities),
+      makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size),
+      makeKey("display_normalization",
+              "distance matrix images: max (paper Eq. 5, M / max M) | minmax (contrast "
+              "stretch)",
+              &Config::display_normalization),
+      makeKey("color_map",
+              "distance matrix colour map 0..11 (AUTUMN BONE JET WINTER RAINBOW OCEAN SUMMER SPRING "
+              "COOL HSV PINK HOT)",
+              &Config::color_map),
   };
   return keys;
 }
@@ -181,7 +185,8 @@ std::string oneOf(const std::vector<std::string>& values)
 
 const std::vector<Config::Key>& Config::keys()
 {
-  static const std::vector<Key> keys = [] {
+  static const std::vector<Key> keys = []
+  {
     std::vector<Key> out;
     for (const auto& k : table())
       out.push_back(k.key);
@@ -192,10 +197,18 @@ const std::vector<Config::Key>& Config::keys()
 
 const std::vector<std::string>& Config::descriptorKeys()
 {
-  static const std::vector<std::string> keys = { "camera_type", "description_type",      "patch_size",
-                                                 "grid_x",      "grid_y",                "panoramas",
-                                                 "descriptor",  "illumination_invariance", "alpha", "patch_normalization",
-                                                 "stereo_num_disparities", "stereo_block_size" };
+  static const std::vector<std::string> keys = {"camera_type",
+                                                "description_type",
+                                                "patch_size",
+                                                "grid_x",
+                                                "grid_y",
+                                                "panoramas",
+                                                "descriptor",
+                                                "illumination_invariance",
+                                                "alpha",
+                                                "patch_normalization",
+                                                "stereo_num_disparities",
+                                                "stereo_block_size"};
   return keys;
 }
 
@@ -217,15 +230,15 @@ bool Config::isBinaryDescriptor() const
 std::vector<std::string> Config::validate() const
 {
   std::vector<std::string> errors;
-  auto bad = [&errors](const std::string& key, const std::string& value, const std::string& expected) {
-    errors.push_back(key + ": value '" + value + "' is not allowed; expected " + expected);
-  };
-  auto inRange = [&](const char* key, int value, int low, int high) {
+  auto bad = [&errors](const std::string& key, const std::string& value, const std::string& expected)
+  { errors.push_back(key + ": value '" + value + "' is not allowed; expected " + expected); };
+  auto inRange = [&](const char* key, int value, int low, int high)
+  {
     if (value < low || value > high)
       bad(key, std::to_string(value), "an integer in [" + std::to_string(low) + ", " + std::to_string(high) + "]");
   };
 
-  const std::vector<std::string> cameras = { "mono", "stereo", "panoramic" };
+  const std::vector<std::string> cameras = {"mono", "stereo", "panoramic"};
   if (std::find(cameras.begin(), cameras.end(), camera_type) == cameras.end())
     bad("camera_type", camera_type, oneOf(cameras));
   if (description_type != "global" && description_type != "grid")

@@ -19,9 +19,7 @@ uint32_t quantizedL2(const uint64_t* a, const uint64_t* b, int length)
 }
 }  // namespace
 
-FrameMetric::FrameMetric(const DescriptorLayout& layout) : layout_(layout)
-{
-}
+FrameMetric::FrameMetric(const DescriptorLayout& layout) : layout_(layout) {}
 
 uint32_t FrameMetric::blockDistance(const uint64_t* a, const uint64_t* b) const
 {

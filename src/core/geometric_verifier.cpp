@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "openable/error.h"
 
@@ -104,21 +103,26 @@ PinholeCamera PinholeCamera::fromProjection(const cv::Matx34d& left, const cv::M
 std::vector<std::string> VerifierParams::validate() const
 {
   std::vector<std::string> errors;
-  auto check = [&errors](bool ok, const std::string& text) {
+  auto check = [&errors](bool ok, const std::string& text)
+  {
     if (!ok)
       errors.push_back(text);
   };
   check(max_features >= 50, "max_features: " + std::to_string(max_features) + ", expected >= 50");
   check(ratio > 0.0 && ratio <= 1.0, "ratio: " + std::to_string(ratio) + ", expected in (0, 1]");
-  check(max_hamming > 0 && max_hamming <= 256, "max_hamming: " + std::to_string(max_hamming) + ", expected in [1, 256]");
-  check(min_inliers >= 8, "min_inliers: " + std::to_string(min_inliers) + ", expected >= 8 (a pose needs more than the minimal set)");
+  check(max_hamming > 0 && max_hamming <= 256,
+        "max_hamming: " + std::to_string(max_hamming) + ", expected in [1, 256]");
+  check(min_inliers >= 8,
+        "min_inliers: " + std::to_string(min_inliers) + ", expected >= 8 (a pose needs more than the minimal set)");
   check(ransac_threshold_px > 0.0, "ransac_threshold_px: " + std::to_string(ransac_threshold_px) + ", expected > 0");
   check(ransac_confidence > 0.0 && ransac_confidence < 1.0,
         "ransac_confidence: " + std::to_string(ransac_confidence) + ", expected in (0, 1)");
   check(ransac_iterations >= 10, "ransac_iterations: " + std::to_string(ransac_iterations) + ", expected >= 10");
   check(min_parallax_deg >= 0.0, "min_parallax_deg: " + std::to_string(min_parallax_deg) + ", expected >= 0");
-  check(identical_max_flow_px >= 0.0, "identical_max_flow_px: " + std::to_string(identical_max_flow_px) + ", expected >= 0");
-  check(stereo_max_row_diff_px > 0.0, "stereo_max_row_diff_px: " + std::to_string(stereo_max_row_diff_px) + ", expected > 0");
+  check(identical_max_flow_px >= 0.0,
+        "identical_max_flow_px: " + std::to_string(identical_max_flow_px) + ", expected >= 0");
+  check(stereo_max_row_diff_px > 0.0,
+        "stereo_max_row_diff_px: " + std::to_string(stereo_max_row_diff_px) + ", expected > 0");
   check(stereo_min_disparity_px > 0.0 && stereo_min_disparity_px < stereo_max_disparity_px,
         "stereo_min_disparity_px / stereo_max_disparity_px: " + std::to_string(stereo_min_disparity_px) + " / " +
             std::to_string(stereo_max_disparity_px) + ", expected 0 < min < max");
@@ -138,13 +142,11 @@ size_t FrameFeatures::depthCount() const
 
 size_t FrameFeatures::bytes() const
 {
-  return sizeof(FrameFeatures) + keypoints.capacity() * sizeof(cv::KeyPoint) + descriptors.total() * descriptors.elemSize() +
-         points.capacity() * sizeof(cv::Point3f);
+  return sizeof(FrameFeatures) + keypoints.capacity() * sizeof(cv::KeyPoint) +
+         descriptors.total() * descriptors.elemSize() + points.capacity() * sizeof(cv::Point3f);
 }
 
-FeatureStore::FeatureStore(size_t max_bytes) : max_bytes_(max_bytes)
-{
-}
+FeatureStore::FeatureStore(size_t max_bytes) : max_bytes_(max_bytes) {}
 
 void FeatureStore::insert(FrameFeatures features)
 {
@@ -226,8 +228,8 @@ GeometricVerifier::GeometricVerifier(const PinholeCamera& camera, const Verifier
   : camera_(camera), params_(params)
 {
   if (!camera_.valid())
-    throw Error("GeometricVerifier: camera focal lengths fx=" + std::to_string(camera_.fx) + " fy=" +
-                std::to_string(camera_.fy) + ", expected > 0 (is the camera calibrated?)");
+    throw Error("GeometricVerifier: camera focal lengths fx=" + std::to_string(camera_.fx) +
+                " fy=" + std::to_string(camera_.fy) + ", expected > 0 (is the camera calibrated?)");
   if (camera_.baseline < 0.0)
     throw Error("GeometricVerifier: stereo baseline " + std::to_string(camera_.baseline) +
                 " m, expected >= 0 (right camera's P(0,3) must be -fx * baseline)");
@@ -246,9 +248,9 @@ FrameFeatures GeometricVerifier::extract(const cv::Mat& left, const cv::Mat& rig
   if (left.empty())
     throw Error("GeometricVerifier::extract: empty left image");
   if (!right.empty() && right.size() != left.size())
-    throw Error("GeometricVerifier::extract: right image " + std::to_string(right.cols) + "x" + std::to_string(right.rows) +
-                " differs from left " + std::to_string(left.cols) + "x" + std::to_string(left.rows) +
-                ", expected a rectified pair of equal size");
+    throw Error("GeometricVerifier::extract: right image " + std::to_string(right.cols) + "x" +
+                std::to_string(right.rows) + " differs from left " + std::to_string(left.cols) + "x" +
+                std::to_string(left.rows) + ", expected a rectified pair of equal size");
   FrameFeatures features;
   features.id = id;
   features.image_size = left.size();
@@ -285,8 +287,8 @@ void GeometricVerifier::stereoDepth(const cv::Mat& left_grey, const cv::Mat& rig
       by_row[r].push_back(static_cast<int>(j));
   }
 
-  constexpr int kHalf = 5;   // SAD window half size for the sub-pixel refinement
-  constexpr int kSearch = 2; // pixels searched either side of the ORB disparity
+  constexpr int kHalf = 5;    // SAD window half size for the sub-pixel refinement
+  constexpr int kSearch = 2;  // pixels searched either side of the ORB disparity
   for (size_t i = 0; i < features.keypoints.size(); ++i)
   {
     const auto& kl = features.keypoints[i];
@@ -302,7 +304,8 @@ void GeometricVerifier::stereoDepth(const cv::Mat& left_grey, const cv::Mat& rig
       const double disparity = kl.pt.x - kr.pt.x;
       if (disparity < params_.stereo_min_disparity_px || disparity > params_.stereo_max_disparity_px)
         continue;
-      const int d = static_cast<int>(cv::norm(features.descriptors.row(static_cast<int>(i)), right_descriptors.row(j), cv::NORM_HAMMING));
+      const int d = static_cast<int>(
+          cv::norm(features.descriptors.row(static_cast<int>(i)), right_descriptors.row(j), cv::NORM_HAMMING));
       if (d < best)
       {
         second = best;
@@ -315,7 +318,8 @@ void GeometricVerifier::stereoDepth(const cv::Mat& left_grey, const cv::Mat& rig
       }
     }
     // Unique and close enough: repeated texture along a row (railings, windows) gives wrong depths.
-    if (best_j < 0 || best > params_.stereo_max_hamming || (second != std::numeric_limits<int>::max() && best > 0.9 * second))
+    if (best_j < 0 || best > params_.stereo_max_hamming ||
+        (second != std::numeric_limits<int>::max() && best > 0.9 * second))
       continue;
 
     // Sub-pixel disparity: SAD of a window around the left keypoint along the right row, parabola through
@@ -353,8 +357,9 @@ void GeometricVerifier::stereoDepth(const cv::Mat& left_grey, const cv::Mat& rig
     if (disparity < params_.stereo_min_disparity_px || disparity > params_.stereo_max_disparity_px)
       continue;
     const double z = camera_.fx * camera_.baseline / disparity;
-    features.points[i] = cv::Point3f(static_cast<float>((kl.pt.x - camera_.cx) * z / camera_.fx),
-                                     static_cast<float>((kl.pt.y - camera_.cy) * z / camera_.fy), static_cast<float>(z));
+    features.points[i] =
+        cv::Point3f(static_cast<float>((kl.pt.x - camera_.cx) * z / camera_.fx),
+                    static_cast<float>((kl.pt.y - camera_.cy) * z / camera_.fy), static_cast<float>(z));
   }
 }
 
@@ -369,8 +374,8 @@ Verification GeometricVerifier::verify(const FrameFeatures& match, const FrameFe
   {
     result.status = VerificationStatus::TooFewFeatures;
     result.reason = "features: match " + std::to_string(result.match_features) + ", query " +
-                    std::to_string(result.query_features) + ", need >= min_inliers " + std::to_string(params_.min_inliers) +
-                    " in each (textureless or dark image?)";
+                    std::to_string(result.query_features) + ", need >= min_inliers " +
+                    std::to_string(params_.min_inliers) + " in each (textureless or dark image?)";
     return result;
   }
   const bool stereo = camera_.stereo() && !match.points.empty();
@@ -429,8 +434,9 @@ Verification GeometricVerifier::verify(const FrameFeatures& match, const FrameFe
   if (result.median_flow_px < params_.identical_max_flow_px)
   {
     result.status = VerificationStatus::IdenticalImages;
-    result.reason = describe("median keypoint motion (px):", result.median_flow_px, "<", params_.identical_max_flow_px) +
-                    ": identical images (the same frame twice?)";
+    result.reason =
+        describe("median keypoint motion (px):", result.median_flow_px, "<", params_.identical_max_flow_px) +
+        ": identical images (the same frame twice?)";
     return result;
   }
   if (stereo)
@@ -561,13 +567,13 @@ void GeometricVerifier::verifyMono(const FrameFeatures& match, const FrameFeatur
     pq.push_back(query.keypoints[m.queryIdx].pt);
   }
   const cv::Mat k = (cv::Mat_<double>(3, 3) << camera_.fx, 0, camera_.cx, 0, camera_.fy, camera_.cy, 0, 0, 1);
-  const auto normalised = [this](const cv::Point2f& p) {
-    return cv::Vec3d((p.x - camera_.cx) / camera_.fx, (p.y - camera_.cy) / camera_.fy, 1.0);
-  };
+  const auto normalised = [this](const cv::Point2f& p)
+  { return cv::Vec3d((p.x - camera_.cx) / camera_.fx, (p.y - camera_.cy) / camera_.fy, 1.0); };
   // Parallax of a correspondence under rotation r_qm: the angle between the two rays once the rotation is
   // removed. Zero for every point under a pure rotation, whatever the scene: then the translation of the
   // essential matrix is noise (and cheirality fails at random).
-  const auto medianParallax = [&](const cv::Matx33d& r_qm, const cv::Mat& inlier_mask) {
+  const auto medianParallax = [&](const cv::Matx33d& r_qm, const cv::Mat& inlier_mask)
+  {
     std::vector<double> parallax;
     for (size_t i = 0; i < pm.size(); ++i)
     {
@@ -643,8 +649,9 @@ void GeometricVerifier::verifyMono(const FrameFeatures& match, const FrameFeatur
   cv::Vec3d t_mq = -(r_qm.t() * t_qm);
   const double focal = 0.5 * (camera_.fx + camera_.fy);
   cv::Vec3d u, b1, b2;
-  const auto residuals = [&](const cv::Matx33d& r_base, const cv::Vec3d& t_base, const cv::Vec<double, 5>& a,
-                             std::vector<double>& out) {
+  const auto residuals =
+      [&](const cv::Matx33d& r_base, const cv::Vec3d& t_base, const cv::Vec<double, 5>& a, std::vector<double>& out)
+  {
     const cv::Vec3d dt = b1 * a[0] + b2 * a[1];
     const cv::Matx33d r = r_base * expSo3(cv::Vec3d(a[2], a[3], a[4]));
     const cv::Vec3d t = t_base + r_base * dt;
@@ -653,7 +660,8 @@ void GeometricVerifier::verifyMono(const FrameFeatures& match, const FrameFeatur
     for (size_t i = 0; i < xm.size(); ++i)
       out[i] = focal * sampson(e, xm[i], xq[i]);
   };
-  const auto squaredSum = [](const std::vector<double>& r) {
+  const auto squaredSum = [](const std::vector<double>& r)
+  {
     double sum = 0.0;
     for (double v : r)
       sum += v * v;
@@ -662,7 +670,8 @@ void GeometricVerifier::verifyMono(const FrameFeatures& match, const FrameFeatur
   const int n = static_cast<int>(xm.size());
   std::vector<double> r0, rp, rn;
   cv::Mat jacobian(n, 5, CV_64F);
-  const auto linearise = [&]() {
+  const auto linearise = [&]()
+  {
     u = cv::normalize(r_mq.t() * t_mq);  // direction in the query frame (the perturbation's frame)
     tangentBasis(u, b1, b2);
     residuals(r_mq, t_mq, cv::Vec<double, 5>::all(0.0), r0);

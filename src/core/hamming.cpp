@@ -1,8 +1,8 @@
 #include "openable/hamming.h"
 
-#include <cmath>
-
 #include <immintrin.h>
+
+#include <cmath>
 
 #include "openable/error.h"
 
@@ -40,8 +40,7 @@ void rowPortable(const uint64_t* q, const uint64_t* rows, size_t stride, size_t 
 #if defined(__x86_64__) || defined(__i386__)
 #define OPENABLE_X86 1
 // ---------------------------------------------------------------------------------------------- popcnt
-__attribute__((target("popcnt"))) inline uint32_t pairPopcntInline(const uint64_t* a, const uint64_t* b,
-                                                                    size_t words)
+__attribute__((target("popcnt"))) inline uint32_t pairPopcntInline(const uint64_t* a, const uint64_t* b, size_t words)
 {
   uint64_t sum = 0;
   for (size_t i = 0; i < words; ++i)
@@ -64,10 +63,10 @@ __attribute__((target("popcnt"))) void rowPopcnt(const uint64_t* q, const uint64
 // ---------------------------------------------------------------------------------------------- AVX2
 // Bit count of every byte by two 4-bit table lookups (vpshufb), summed per 64-bit lane with vpsadbw.
 __attribute__((target("avx2,popcnt"))) inline uint32_t pairAvx2Inline(const uint64_t* a, const uint64_t* b,
-                                                                       size_t words)
+                                                                      size_t words)
 {
-  const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2, 1, 2, 2, 3, 1, 2,
-                                         2, 3, 2, 3, 3, 4);
+  const __m256i table =
+      _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
   const __m256i low_mask = _mm256_set1_epi8(0x0f);
   __m256i total = _mm256_setzero_si256();
   size_t i = 0;
@@ -104,13 +103,13 @@ __attribute__((target("avx2,popcnt"))) void rowAvx2(const uint64_t* q, const uin
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 __attribute__((target("avx512f,avx512vpopcntdq"))) inline uint32_t pairAvx512Inline(const uint64_t* a,
-                                                                                     const uint64_t* b, size_t words)
+                                                                                    const uint64_t* b, size_t words)
 {
   __m512i total = _mm512_setzero_si512();
   size_t i = 0;
   for (; i + 8 <= words; i += 8)
-    total = _mm512_add_epi64(total, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(a + i),
-                                                                          _mm512_loadu_si512(b + i))));
+    total = _mm512_add_epi64(
+        total, _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(a + i), _mm512_loadu_si512(b + i))));
   if (i < words)
   {
     // Masked loads read only the remaining words (and never past the end of the descriptor).
@@ -122,14 +121,14 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) inline uint32_t pairAvx512Inl
 }
 
 __attribute__((target("avx512f,avx512vpopcntdq"))) uint32_t pairAvx512(const uint64_t* a, const uint64_t* b,
-                                                                        size_t words)
+                                                                       size_t words)
 {
   return pairAvx512Inline(a, b, words);
 }
 
 __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t* q, const uint64_t* rows,
-                                                                   size_t stride, size_t words, size_t count,
-                                                                   uint32_t* out)
+                                                                  size_t stride, size_t words, size_t count,
+                                                                  uint32_t* out)
 {
   if (words > 24)
   {
@@ -172,14 +171,14 @@ Kernel kernelFor(HammingKernel kernel)
   {
 #ifdef OPENABLE_X86
     case HammingKernel::kPopcnt:
-      return { pairPopcnt, rowPopcnt };
+      return {pairPopcnt, rowPopcnt};
     case HammingKernel::kAvx2:
-      return { pairAvx2, rowAvx2 };
+      return {pairAvx2, rowAvx2};
     case HammingKernel::kAvx512Vpopcntdq:
-      return { pairAvx512, rowAvx512 };
+      return {pairAvx512, rowAvx512};
 #endif
     default:
-      return { pairPortable, rowPortable };
+      return {pairPortable, rowPortable};
   }
 }
 
@@ -216,7 +215,7 @@ std::string kernelName(HammingKernel kernel)
 
 std::vector<HammingKernel> supportedKernels()
 {
-  std::vector<HammingKernel> kernels = { HammingKernel::kPortable };
+  std::vector<HammingKernel> kernels = {HammingKernel::kPortable};
 #ifdef OPENABLE_X86
   __builtin_cpu_init();
   if (__builtin_cpu_supports("popcnt"))
@@ -244,8 +243,7 @@ uint32_t hamming(HammingKernel kernel, const uint64_t* a, const uint64_t* b, siz
   return checkedKernel(kernel).pair(a, b, words);
 }
 
-void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size_t words, size_t count,
-                uint32_t* out)
+void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size_t words, size_t count, uint32_t* out)
 {
   best().row(query, rows, stride, words, count, out);
 }

@@ -1,14 +1,13 @@
 #include "openable/image_source.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-
-#include <unistd.h>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 

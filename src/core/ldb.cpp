@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstring>
-
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
@@ -15,9 +14,7 @@ namespace
 class BoxSums
 {
 public:
-  explicit BoxSums(const cv::Mat& integral) : integral_(integral)
-  {
-  }
+  explicit BoxSums(const cv::Mat& integral) : integral_(integral) {}
   double sum(int x0, int y0, int x1, int y1) const
   {
     return at(y1, x1) - at(y0, x1) - at(y1, x0) + at(y0, x0);
@@ -73,7 +70,7 @@ void computeLdb(const cv::Mat& values, const cv::Mat& mask, uint64_t* words)
   }
   const BoxSums value_sums(value_integral);
   const BoxSums count_sums(count_integral);
-  const MeanOver mean{ value_sums, mask.empty() ? nullptr : &count_sums };
+  const MeanOver mean{value_sums, mask.empty() ? nullptr : &count_sums};
 
   std::memset(words, 0, sizeof(uint64_t) * wordsForBits(kLdbBits));
   int bit = 0;

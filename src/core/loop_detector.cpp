@@ -22,25 +22,26 @@ size_t capacityFor(const Config& config)
 }  // namespace
 
 LoopDetector::LoopDetector(const Config& config)
-  : config_(config)
-  , localisation_(false)
-  , database_(layoutFor(config), capacityFor(config), config.toYaml())
-  , matcher_(database_.layout(), config.sequence_length, config.bidirectional)
-  , metric_(database_.layout())
+  : config_(config),
+    localisation_(false),
+    database_(layoutFor(config), capacityFor(config), config.toYaml()),
+    matcher_(database_.layout(), config.sequence_length, config.bidirectional),
+    metric_(database_.layout())
 {
 }
 
 LoopDetector::LoopDetector(const Config& config, PlaceDatabase reference_map)
-  : config_(config)
-  , localisation_(true)
-  , database_(std::move(reference_map))
-  , matcher_(database_.layout(), config.sequence_length, config.bidirectional)
-  , metric_(database_.layout())
+  : config_(config),
+    localisation_(true),
+    database_(std::move(reference_map)),
+    matcher_(database_.layout(), config.sequence_length, config.bidirectional),
+    metric_(database_.layout())
 {
   config.validateOrThrow();
   if (database_.layout() != layoutFor(config))
-    throw Error("the reference map's descriptors do not match this configuration (descriptor, patch_size, grid, "
-                "panoramas or camera_type differ)");
+    throw Error(
+        "the reference map's descriptors do not match this configuration (descriptor, patch_size, grid, "
+        "panoramas or camera_type differ)");
 }
 
 int LoopDetector::minTerms() const
@@ -158,7 +159,8 @@ void LoopDetector::updateMatching(const Config& config)
     std::string keys;
     for (const auto& k : changed)
       keys += (keys.empty() ? "" : ", ") + k;
-    throw Error("cannot change " + keys + " while running: they change the stored descriptors or history; "
+    throw Error("cannot change " + keys +
+                " while running: they change the stored descriptors or history; "
                 "restart the detector (the history is rebuilt from new frames)");
   }
   if (config.sequence_length != config_.sequence_length)

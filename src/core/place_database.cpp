@@ -13,7 +13,7 @@ namespace openable
 {
 namespace
 {
-constexpr char kMagic[8] = { 'O', 'P', 'N', 'A', 'B', 'L', 'E', 'M' };
+constexpr char kMagic[8] = {'O', 'P', 'N', 'A', 'B', 'L', 'E', 'M'};
 constexpr uint32_t kVersion = 1;
 constexpr size_t kAlignment = 64;
 
@@ -59,9 +59,7 @@ private:
 class Reader
 {
 public:
-  Reader(const std::string& bytes, size_t end, const std::string& path) : bytes_(bytes), end_(end), path_(path)
-  {
-  }
+  Reader(const std::string& bytes, size_t end, const std::string& path) : bytes_(bytes), end_(end), path_(path) {}
   template <typename T>
   T get(const char* what)
   {
@@ -106,12 +104,12 @@ PlaceDatabase::PlaceDatabase(const DescriptorLayout& layout, size_t capacity, st
 }
 
 PlaceDatabase::PlaceDatabase(const PlaceDatabase& other)
-  : layout_(other.layout_)
-  , stride_(other.stride_)
-  , capacity_(other.capacity_)
-  , config_yaml_(other.config_yaml_)
-  , first_id_(other.first_id_)
-  , infos_(other.infos_)
+  : layout_(other.layout_),
+    stride_(other.stride_),
+    capacity_(other.capacity_),
+    config_yaml_(other.config_yaml_),
+    first_id_(other.first_id_),
+    infos_(other.infos_)
 {
   reserve(other.size());
   if (other.size())

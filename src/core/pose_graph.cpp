@@ -1,9 +1,9 @@
 #include "openable/pose_graph.h"
 
+#include <ceres/ceres.h>
+
 #include <cmath>
 #include <memory>
-
-#include <ceres/ceres.h>
 
 #include "openable/error.h"
 
@@ -45,9 +45,11 @@ public:
     return true;
   }
 
-  static ceres::CostFunction* create(const Eigen::Vector3d& t, const Eigen::Quaterniond& q, const Matrix6d& sqrt_information)
+  static ceres::CostFunction* create(const Eigen::Vector3d& t, const Eigen::Quaterniond& q,
+                                     const Matrix6d& sqrt_information)
   {
-    return new ceres::AutoDiffCostFunction<RelativePoseError, 6, 3, 4, 3, 4>(new RelativePoseError(t, q, sqrt_information));
+    return new ceres::AutoDiffCostFunction<RelativePoseError, 6, 3, 4, 3, 4>(
+        new RelativePoseError(t, q, sqrt_information));
   }
 
   EIGEN_MAKE_ALIGNED_OPERATOR_NEW
@@ -92,7 +94,7 @@ size_t PoseGraph::addNode(const Eigen::Isometry3d& world_T_node)
 {
   if (!finite(world_T_node))
     throw Error("PoseGraph::addNode: non-finite pose");
-  nodes_.push_back(Node{ world_T_node.translation(), Eigen::Quaterniond(world_T_node.rotation()).normalized() });
+  nodes_.push_back(Node{world_T_node.translation(), Eigen::Quaterniond(world_T_node.rotation()).normalized()});
   return nodes_.size() - 1;
 }
 
@@ -106,7 +108,8 @@ void PoseGraph::addLoop(size_t match, size_t query, const Eigen::Isometry3d& mat
   addEdge(match, query, match_T_query, information, true);
 }
 
-void PoseGraph::addEdge(size_t from, size_t to, const Eigen::Isometry3d& measurement, const Matrix6d& information, bool loop)
+void PoseGraph::addEdge(size_t from, size_t to, const Eigen::Isometry3d& measurement, const Matrix6d& information,
+                        bool loop)
 {
   const char* kind = loop ? "PoseGraph::addLoop" : "PoseGraph::addOdometry";
   if (from >= nodes_.size() || to >= nodes_.size())

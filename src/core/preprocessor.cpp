@@ -1,7 +1,6 @@
 #include "openable/preprocessor.h"
 
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
@@ -12,7 +11,7 @@ namespace
 {
 std::string describeMat(const cv::Mat& m)
 {
-  static const char* depths[] = { "8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F" };
+  static const char* depths[] = {"8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F"};
   return std::to_string(m.cols) + "x" + std::to_string(m.rows) + " " + depths[m.depth()] + "C" +
          std::to_string(m.channels());
 }
@@ -77,9 +76,7 @@ cv::Mat illuminationInvariant(const cv::Mat& bgr, double alpha)
   return out;
 }
 
-Preprocessor::Preprocessor(const Config& config) : config_(config)
-{
-}
+Preprocessor::Preprocessor(const Config& config) : config_(config) {}
 
 int Preprocessor::cellsAcross() const
 {
@@ -124,9 +121,9 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
   const int p = config_.patch_size;
   cv::Mat small;
   cv::resize(image, small, cv::Size(across * p, down * p), 0, 0, cv::INTER_AREA);
-  return split(normalizeBlocks(toOneChannel(small, config_.illumination_invariance, config_.alpha),
-                               config_.patch_normalization),
-               cv::Mat(), across);
+  return split(
+      normalizeBlocks(toOneChannel(small, config_.illumination_invariance, config_.alpha), config_.patch_normalization),
+      cv::Mat(), across);
 }
 
 std::vector<Patch> Preprocessor::patchesFromCameras(const std::vector<cv::Mat>& images) const

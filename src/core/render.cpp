@@ -1,7 +1,6 @@
 #include "openable/render.h"
 
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"

@@ -99,7 +99,7 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
   if (new_first != first_id_)
   {
     const size_t gone = static_cast<size_t>(std::min<uint64_t>(new_first - first_id_, forward_.sum.size()));
-    for (Chains* chains : { &forward_, &reverse_ })
+    for (Chains* chains : {&forward_, &reverse_})
     {
       const size_t n = std::min(gone, chains->sum.size());
       chains->sum.erase(chains->sum.begin(), chains->sum.begin() + static_cast<long>(n));
@@ -195,8 +195,7 @@ void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t colu
     const size_t drop_end = std::min(end, stored > L ? stored - L : 0);
     if (can_drop && begin < drop_end)
       metric_.row(leaving_query, reference.descriptor(begin + L), drop_end - begin, dropped_distances_.data());
-    if (can_drop && end <= drop_end && end < old.count.size() &&
-        allFull(old.count.data() + begin + 1, end - begin, L))
+    if (can_drop && end <= drop_end && end < old.count.size() && allFull(old.count.data() + begin + 1, end - begin, L))
     {
       addAndDrop(old.sum.data() + begin + 1, current + begin, dropped_distances_.data(), end - begin,
                  next.sum.data() + begin);

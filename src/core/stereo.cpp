@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -18,7 +17,7 @@ std::string describe(const cv::Mat& m)
 {
   if (m.empty())
     return "empty";
-  static const char* depths[] = { "8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F" };
+  static const char* depths[] = {"8U", "8S", "16U", "16S", "32S", "32F", "64F", "16F"};
   return std::to_string(m.cols) + "x" + std::to_string(m.rows) + " " + depths[m.depth()] + "C" +
          std::to_string(m.channels());
 }
@@ -37,7 +36,7 @@ constexpr float kInvalid = std::numeric_limits<float>::quiet_NaN();
 
 void checkStereoPair(const cv::Mat& left, const cv::Mat& right)
 {
-  for (const cv::Mat* image : { &left, &right })
+  for (const cv::Mat* image : {&left, &right})
   {
     const char* what = image == &left ? "left image" : "right image";
     if (image->empty())
@@ -99,8 +98,9 @@ cv::Mat disparityFromPair(const cv::Mat& left, const cv::Mat& right, const Confi
 cv::Mat disparityFromImage(const cv::Mat& disparity)
 {
   if (disparity.empty())
-    throw Error("disparity image is empty; expected one channel CV_32F (pixels), CV_16S (pixels * 16) or CV_16U "
-                "(pixels * 256)");
+    throw Error(
+        "disparity image is empty; expected one channel CV_32F (pixels), CV_16S (pixels * 16) or CV_16U "
+        "(pixels * 256)");
   if (disparity.channels() != 1 ||
       (disparity.depth() != CV_32F && disparity.depth() != CV_16S && disparity.depth() != CV_16U))
     throw Error("disparity image is " + describe(disparity) +

@@ -36,13 +36,6 @@
 //   ~publish_tf (bool, true)
 //   ~marker_width (double, 0.3 m): line width of loop_edges
 
-#include <algorithm>
-#include <cmath>
-#include <deque>
-#include <string>
-#include <vector>
-
-#include <Eigen/Geometry>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
@@ -51,6 +44,13 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/MarkerArray.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <string>
+#include <vector>
 
 #include "openable/error.h"
 #include "openable/pose_graph.h"
@@ -66,7 +66,9 @@ Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p)
 {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  t.linear() = Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z).normalized().toRotationMatrix();
+  t.linear() = Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
+                   .normalized()
+                   .toRotationMatrix();
   return t;
 }
 
@@ -74,7 +76,8 @@ Eigen::Isometry3d toEigen(const geometry_msgs::Transform& p)
 {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
   t.translation() = Eigen::Vector3d(p.translation.x, p.translation.y, p.translation.z);
-  t.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
+  t.linear() =
+      Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
   return t;
 }
 
@@ -96,8 +99,8 @@ bool finitePose(const geometry_msgs::Pose& p)
 {
   const double q = p.orientation.w * p.orientation.w + p.orientation.x * p.orientation.x +
                    p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z;
-  return std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) && std::isfinite(q) &&
-         q > 1e-6;
+  return std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
+         std::isfinite(q) && q > 1e-6;
 }
 
 // SE3 adjoint for perturbations ordered (translation, rotation): Exp(Ad_T e) = T Exp(e) T^-1.
@@ -136,10 +139,12 @@ public:
     // Deep odometry queue: an optimisation may hold the (single) callback thread for a fraction of a second.
     odom_sub_ = nh.subscribe("odom", 1000, &PoseGraphNode::odometryCallback, this);
     loop_sub_ = nh.subscribe("loop_closures", 100, &PoseGraphNode::loopCallback, this);
-    optimise_timer_ = nh.createWallTimer(ros::WallDuration(optimise_period_), [this](const ros::WallTimerEvent&) {
-      if (dirty_)
-        optimise();
-    });
+    optimise_timer_ = nh.createWallTimer(ros::WallDuration(optimise_period_),
+                                         [this](const ros::WallTimerEvent&)
+                                         {
+                                           if (dirty_)
+                                             optimise();
+                                         });
     ROS_INFO("pose_graph_node: keyframes every %.2f m / %.2f rad of %s, loops from %s, %s loss, map frame '%s'",
              keyframe_distance_, keyframe_angle_, odom_sub_.getTopic().c_str(), loop_sub_.getTopic().c_str(),
              loss_name_.c_str(), map_frame_.c_str());
@@ -204,7 +209,8 @@ private:
       options.loop_loss = openable::RobustLoss::None;
     else
     {
-      ROS_WARN("pose_graph_node: ~loss '%s' is unknown (expected cauchy, huber or none); using cauchy", loss_name_.c_str());
+      ROS_WARN("pose_graph_node: ~loss '%s' is unknown (expected cauchy, huber or none); using cauchy",
+               loss_name_.c_str());
       loss_name_ = "cauchy";
     }
     positive(pnh, "loss_scale", options.loop_loss_scale, 1.0);
@@ -225,7 +231,8 @@ private:
   {
     if (!finitePose(msg->pose.pose))
     {
-      ROS_WARN_THROTTLE(5.0, "pose_graph_node: odometry on %s at %.3f has a non-finite pose or zero quaternion; ignored",
+      ROS_WARN_THROTTLE(5.0,
+                        "pose_graph_node: odometry on %s at %.3f has a non-finite pose or zero quaternion; ignored",
                         odom_sub_.getTopic().c_str(), msg->header.stamp.toSec());
       return;
     }
@@ -237,27 +244,29 @@ private:
       {
         // Before the very first keyframe: time jumped back (bag restarted with --loop, sim time reset), the
         // graph belongs to another run. A merely late sample lands inside the history instead.
-        ROS_WARN("pose_graph_node: odometry jumped back in time from %.3f to %.3f, before the first keyframe; "
-                 "clearing the graph",
-                 newest.toSec(), msg->header.stamp.toSec());
+        ROS_WARN(
+            "pose_graph_node: odometry jumped back in time from %.3f to %.3f, before the first keyframe; "
+            "clearing the graph",
+            newest.toSec(), msg->header.stamp.toSec());
         reset();
       }
       else if (msg->header.stamp <= newest)
       {
         // Late / out of order: keep it for placing image stamps, but keyframes only follow the newest.
-        ROS_WARN_THROTTLE(5.0, "pose_graph_node: odometry out of order (stamp %.3f <= latest %.3f); kept in the "
-                               "history, not used for keyframes",
+        ROS_WARN_THROTTLE(5.0,
+                          "pose_graph_node: odometry out of order (stamp %.3f <= latest %.3f); kept in the "
+                          "history, not used for keyframes",
                           msg->header.stamp.toSec(), newest.toSec());
         auto it = std::upper_bound(history_.begin(), history_.end(), msg->header.stamp,
                                    [](const ros::Time& t, const OdometrySample& s) { return t < s.stamp; });
         if (it == history_.begin() || std::prev(it)->stamp != msg->header.stamp)
-          history_.insert(it, OdometrySample{ msg->header.stamp, pose });
+          history_.insert(it, OdometrySample{msg->header.stamp, pose});
         return;
       }
     }
     odom_frame_ = msg->header.frame_id;
     child_frame_ = msg->child_frame_id;
-    history_.push_back(OdometrySample{ msg->header.stamp, pose });
+    history_.push_back(OdometrySample{msg->header.stamp, pose});
     while (history_.size() > odometry_history_)
       history_.pop_front();
 
@@ -294,7 +303,7 @@ private:
           Eigen::Vector3d::Constant(1.0 / (sigma_r * sigma_r));
       graph_.addOdometry(node - 1, node, delta, information);
     }
-    keyframes_.push_back(Keyframe{ stamp, odom_pose });
+    keyframes_.push_back(Keyframe{stamp, odom_pose});
     publishPath(stamp);
   }
 
@@ -303,8 +312,9 @@ private:
     if (!msg->has_relative_pose && !use_unverified_)
     {
       ++ignored_unverified_;
-      ROS_INFO_THROTTLE(10.0, "pose_graph_node: %zu loop closure(s) without relative_pose ignored (turn on the "
-                              "detector's ~verify, or set ~use_unverified to add them as position constraints)",
+      ROS_INFO_THROTTLE(10.0,
+                        "pose_graph_node: %zu loop closure(s) without relative_pose ignored (turn on the "
+                        "detector's ~verify, or set ~use_unverified to add them as position constraints)",
                         ignored_unverified_);
       return;
     }
@@ -319,8 +329,9 @@ private:
       pending_.push_back(msg);
       if (pending_.size() > 100)
       {
-        ROS_WARN_THROTTLE(5.0, "pose_graph_node: more than 100 loop closures wait for odometry; dropping the oldest "
-                               "(is %s being published?)",
+        ROS_WARN_THROTTLE(5.0,
+                          "pose_graph_node: more than 100 loop closures wait for odometry; dropping the oldest "
+                          "(is %s being published?)",
                           odom_sub_.getTopic().c_str());
         pending_.pop_front();
       }
@@ -342,15 +353,17 @@ private:
     if (rq == Resolve::NotYet || rm == Resolve::NotYet)
     {
       // Drop when odometry has moved well past the stamp without covering it.
-      return !history_.empty() && history_.back().stamp > msg.header.stamp + ros::Duration(5.0 * max_interpolation_gap_) &&
+      return !history_.empty() &&
+             history_.back().stamp > msg.header.stamp + ros::Duration(5.0 * max_interpolation_gap_) &&
              warnUnmatched(msg);
     }
     if (rq == Resolve::Never || rm == Resolve::Never)
       return warnUnmatched(msg);
     if (query.node == match.node)
     {
-      ROS_WARN_THROTTLE(5.0, "pose_graph_node: loop %u -> %u joins keyframe %zu to itself (stamps %.3f s apart); "
-                             "ignored (raise the detector's exclusion window?)",
+      ROS_WARN_THROTTLE(5.0,
+                        "pose_graph_node: loop %u -> %u joins keyframe %zu to itself (stamps %.3f s apart); "
+                        "ignored (raise the detector's exclusion window?)",
                         msg.query_id, msg.match_id, query.node, (msg.header.stamp - msg.match_stamp).toSec());
       return true;
     }
@@ -364,8 +377,9 @@ private:
       }
       catch (const tf2::TransformException& e)
       {
-        ROS_WARN_THROTTLE(5.0, "pose_graph_node: no tf from odometry child frame '%s' to camera frame '%s' (%s); loop "
-                               "%u -> %u ignored",
+        ROS_WARN_THROTTLE(5.0,
+                          "pose_graph_node: no tf from odometry child frame '%s' to camera frame '%s' (%s); loop "
+                          "%u -> %u ignored",
                           child_frame_.c_str(), msg.header.frame_id.c_str(), e.what(), msg.query_id, msg.match_id);
         return true;
       }
@@ -416,9 +430,10 @@ private:
   bool warnUnmatched(const LoopClosure& msg)
   {
     ++unmatched_;
-    ROS_WARN_THROTTLE(5.0, "pose_graph_node: loop %u -> %u (stamps %.3f, %.3f) matches no keyframe: odometry covers "
-                           "%.3f .. %.3f (%zu keyframes); ignored (%zu so far). Loop stamps must be image stamps "
-                           "within the odometry's time span",
+    ROS_WARN_THROTTLE(5.0,
+                      "pose_graph_node: loop %u -> %u (stamps %.3f, %.3f) matches no keyframe: odometry covers "
+                      "%.3f .. %.3f (%zu keyframes); ignored (%zu so far). Loop stamps must be image stamps "
+                      "within the odometry's time span",
                       msg.query_id, msg.match_id, msg.header.stamp.toSec(), msg.match_stamp.toSec(),
                       history_.empty() ? 0.0 : history_.front().stamp.toSec(),
                       history_.empty() ? 0.0 : history_.back().stamp.toSec(), keyframes_.size(), unmatched_);
@@ -488,7 +503,8 @@ private:
     const size_t outliers =
         static_cast<size_t>(std::count_if(weights.begin(), weights.end(), [](double w) { return w < 0.1; }));
     ROS_INFO("pose_graph_node: %zu keyframes, %zu loops (%zu down-weighted as outliers), cost %.3g -> %.3g in %.3f s",
-             graph_.nodeCount(), graph_.loopCount(), outliers, summary.initial_cost, summary.final_cost, summary.seconds);
+             graph_.nodeCount(), graph_.loopCount(), outliers, summary.initial_cost, summary.final_cost,
+             summary.seconds);
     publishPath(keyframes_.back().stamp);
     publishMarkers(weights);
   }
@@ -542,7 +558,7 @@ private:
       color.g = trusted ? 0.9f : 0.1f;
       color.b = 0.1f;
       color.a = 1.0f;
-      for (size_t end : { loops_[i].first, loops_[i].second })
+      for (size_t end : {loops_[i].first, loops_[i].second})
       {
         lines.points.push_back(toPose(graph_.pose(end)).position);
         lines.colors.push_back(color);

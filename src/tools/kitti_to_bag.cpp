@@ -14,33 +14,32 @@
 // images of a sequence (times.txt lists all frames) is fine; an image without a stamp is an error.
 // ROS-free apart from the message types and rosbag; no master needed.
 
+#include <dirent.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/time.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <sys/stat.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 #include <array>
+#include <boost/make_shared.hpp>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <dirent.h>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <boost/make_shared.hpp>
-#include <geometry_msgs/TransformStamped.h>
-#include <nav_msgs/Odometry.h>
-#include <opencv2/imgcodecs.hpp>
-#include <ros/time.h>
-#include <rosbag/bag.h>
-#include <sensor_msgs/CameraInfo.h>
-#include <sensor_msgs/Image.h>
-#include <tf2_msgs/TFMessage.h>
 
 namespace
 {
@@ -92,7 +91,8 @@ Options parseArguments(int argc, char** argv)
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
-    const auto value = [&]() -> std::string {
+    const auto value = [&]() -> std::string
+    {
       if (i + 1 >= argc)
         throw UsageError(arg + " needs a value");
       return argv[++i];
@@ -245,8 +245,8 @@ std::vector<Projection> readPoses(const std::string& path)
 // Rigid transform as 3x3 rotation + translation (row-major), enough for what the converter composes.
 struct Rigid
 {
-  double r[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
-  double t[3] = { 0, 0, 0 };
+  double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  double t[3] = {0, 0, 0};
 
   Rigid operator*(const Rigid& o) const
   {
@@ -310,10 +310,11 @@ std::array<double, 3> projectionOffset(const Projection& p)
   const double tz = p[11];
   const double ty = (p[7] - cy * tz) / fy;
   const double tx = (p[3] - cx * tz) / fx;
-  return { tx, ty, tz };
+  return {tx, ty, tz};
 }
 
-sensor_msgs::CameraInfo cameraInfo(const Projection& p, double tx_metres, const cv::Size& size, const std::string& frame)
+sensor_msgs::CameraInfo cameraInfo(const Projection& p, double tx_metres, const cv::Size& size,
+                                   const std::string& frame)
 {
   sensor_msgs::CameraInfo info;
   info.header.frame_id = frame;
@@ -321,11 +322,11 @@ sensor_msgs::CameraInfo cameraInfo(const Projection& p, double tx_metres, const 
   info.height = static_cast<uint32_t>(size.height);
   info.distortion_model = "plumb_bob";
   info.D.assign(5, 0.0);  // rectified images: no distortion left
-  info.K = { p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10] };
-  info.R = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
+  info.K = {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]};
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   // P = K [I | (Tx, 0, 0)] with Tx = -fx * baseline for the right camera, 0 for the left (REP: the
   // projection of a point in the left camera's frame).
-  info.P = { p[0], p[1], p[2], p[0] * tx_metres, p[4], p[5], p[6], 0.0, p[8], p[9], p[10], 0.0 };
+  info.P = {p[0], p[1], p[2], p[0] * tx_metres, p[4], p[5], p[6], 0.0, p[8], p[9], p[10], 0.0};
   return info;
 }
 
@@ -382,9 +383,10 @@ int run(const Options& o, bool& bag_opened)
   const auto calibration = readCalibration(dir + "calib.txt");
   const std::string left_key = o.color ? "P2" : "P0";
   const std::string right_key = o.color ? "P3" : "P1";
-  for (const auto& key : { left_key, right_key })
+  for (const auto& key : {left_key, right_key})
     if (!calibration.count(key) && (key == left_key || o.stereo))
-      throw std::runtime_error(dir + "calib.txt has no " + key + " (expected lines 'P0: ...' to 'P3: ...' with 12 numbers)");
+      throw std::runtime_error(dir + "calib.txt has no " + key +
+                               " (expected lines 'P0: ...' to 'P3: ...' with 12 numbers)");
 
   const auto times = readTimes(dir + "times.txt");
   const auto left_images = listImages(dir + left_dir);
@@ -399,8 +401,8 @@ int run(const Options& o, bool& bag_opened)
     while (left_images.count(gap))
       ++gap;
     throw std::runtime_error(dir + left_dir + "/ has " + std::to_string(left_images.size()) + " images numbered " +
-                             std::to_string(first_index) + ".." + std::to_string(last_index) + " with gaps (first missing: " +
-                             std::to_string(gap) + ")");
+                             std::to_string(first_index) + ".." + std::to_string(last_index) +
+                             " with gaps (first missing: " + std::to_string(gap) + ")");
   }
   if (static_cast<long>(times.size()) <= last_index)
     throw std::runtime_error("image/time count mismatch: " + left_dir + "/ has images up to frame " +
@@ -423,8 +425,9 @@ int run(const Options& o, bool& bag_opened)
   const long first = o.first >= 0 ? o.first : first_index;
   const long last = o.last >= 0 ? o.last : last_index;
   if (first < first_index || last > last_index)
-    throw std::runtime_error("frame range " + std::to_string(first) + ".." + std::to_string(last) + " is outside the images " +
-                             std::to_string(first_index) + ".." + std::to_string(last_index));
+    throw std::runtime_error("frame range " + std::to_string(first) + ".." + std::to_string(last) +
+                             " is outside the images " + std::to_string(first_index) + ".." +
+                             std::to_string(last_index));
   if (last < first)
     throw std::runtime_error("empty frame range " + std::to_string(first) + ".." + std::to_string(last));
 
@@ -442,7 +445,7 @@ int run(const Options& o, bool& bag_opened)
   // trajectory lies in rviz's ground plane; `camera_left` is the optical frame of the left camera used
   // (camera 0, or camera 2 with --color, offset from camera 0 by its P).
   Rigid odom_T_cam0start;
-  const double body_from_optical[9] = { 0, 0, 1, -1, 0, 0, 0, -1, 0 };
+  const double body_from_optical[9] = {0, 0, 1, -1, 0, 0, 0, -1, 0};
   std::copy(body_from_optical, body_from_optical + 9, odom_T_cam0start.r);
   const Projection& p_left = calibration.at(left_key);
   const auto offset_left = projectionOffset(p_left);  // p_camL = p_cam0 + offset
@@ -470,9 +473,9 @@ int run(const Options& o, bool& bag_opened)
   {
     throw std::runtime_error("cannot write " + o.output + ": " + e.what());
   }
-  bag.setCompression(o.compression == "bz2" ? rosbag::compression::BZ2 :
-                     o.compression == "lz4" ? rosbag::compression::LZ4 :
-                                              rosbag::compression::Uncompressed);
+  bag.setCompression(o.compression == "bz2"   ? rosbag::compression::BZ2
+                     : o.compression == "lz4" ? rosbag::compression::LZ4
+                                              : rosbag::compression::Uncompressed);
   const std::string left_frame = "camera_left", right_frame = "camera_right";
   cv::Size size;
   std::string size_source;
@@ -493,8 +496,8 @@ int run(const Options& o, bool& bag_opened)
     }
     if (left.size() != size)
       throw std::runtime_error("images of mixed sizes: " + left_path + " is " + std::to_string(left.cols) + "x" +
-                               std::to_string(left.rows) + ", " + size_source + " is " + std::to_string(size.width) + "x" +
-                               std::to_string(size.height) + " (one sequence has one camera size)");
+                               std::to_string(left.rows) + ", " + size_source + " is " + std::to_string(size.width) +
+                               "x" + std::to_string(size.height) + " (one sequence has one camera size)");
     auto left_msg = toImage(left, left_frame);
     left_msg.header.stamp = stamp;
     left_msg.header.seq = static_cast<uint32_t>(k);

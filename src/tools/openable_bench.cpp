@@ -11,12 +11,11 @@
 
 #include <benchmark/benchmark.h>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "openable/frame_describer.h"
 #include "openable/frame_metric.h"
@@ -164,8 +163,8 @@ void registerAll()
       benchmark::RegisterBenchmark(("BM_Describe/" + name).c_str(), describe, name)->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_Describe/LDB_illumination_invariant", describeInvariant)
       ->Unit(benchmark::kMicrosecond);
-  const size_t sizes[] = { 1000, 10000, 100000, 1000000 };
-  const int lengths[] = { 1, 10, 300 };
+  const size_t sizes[] = {1000, 10000, 100000, 1000000};
+  const int lengths[] = {1, 10, 300};
   for (size_t n : sizes)
   {
     for (int L : lengths)

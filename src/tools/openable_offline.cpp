@@ -12,12 +12,11 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "openable/config.h"
 #include "openable/error.h"
@@ -167,7 +166,8 @@ public:
       if (right_)
       {
         openable::checkStereoPair(image, right);
-        patches = describer_.preprocessor().patchesWithDisparity(image, openable::disparityFromPair(image, right, config_));
+        patches =
+            describer_.preprocessor().patchesWithDisparity(image, openable::disparityFromPair(image, right, config_));
       }
       else
         patches = describer_.preprocessor().patches(image);
@@ -339,7 +339,8 @@ int run(const Options& options)
        << "  \"database_bytes\": " << detector->database().bytes() << "\n}\n";
   openable::writeFileAtomically((out_dir / "timings.json").string(), json.str());
 
-  const double per_frame = timings.frames ? (timings.preprocess + timings.describe + timings.match) / timings.frames : 0;
+  const double per_frame =
+      timings.frames ? (timings.preprocess + timings.describe + timings.match) / timings.frames : 0;
   std::cout << "mode: " << (localisation ? "localisation (query vs reference)" : "loop closure (stream vs its past)")
             << "\n"
             << "frames: " << rows << " x " << columns << " (described " << timings.frames << ")\n"
@@ -352,11 +353,11 @@ int run(const Options& options)
     std::cout << "best match within " << options.ground_truth_tolerance << " frames of the truth: " << std::fixed
               << std::setprecision(3) << double(truth_hits) / truth_checked << " (" << truth_hits << " of "
               << truth_checked << ")\n"
-              << "listed matches within " << options.ground_truth_tolerance << " frames of the truth: "
-              << matches_correct << " of " << matches << "\n";
+              << "listed matches within " << options.ground_truth_tolerance
+              << " frames of the truth: " << matches_correct << " of " << matches << "\n";
   std::cout << std::fixed << std::setprecision(3) << "time per frame: " << per_frame
-            << " ms (preprocess + describe + match, image decoding excluded: " << timings.read / std::max<size_t>(1, timings.frames)
-            << " ms)\n"
+            << " ms (preprocess + describe + match, image decoding excluded: "
+            << timings.read / std::max<size_t>(1, timings.frames) << " ms)\n"
             << "wrote: " << options.output << "/{distance_matrix.npy,distance_matrix.png,"
             << (config.threshold >= 0 ? "distance_matrix_thresholded.png," : "") << "loop_closures.csv,timings.json}\n";
   return 0;

@@ -3,12 +3,11 @@
 
 #include <cmath>
 #include <fstream>
-#include <sstream>
-#include <string>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
 
 #include "openable/error.h"
 #include "openable/geometric_verifier.h"
@@ -50,14 +49,14 @@ cv::Matx44d inverse(const cv::Matx44d& t)
   const cv::Vec3d p(t(0, 3), t(1, 3), t(2, 3));
   const cv::Matx33d rt = r.t();
   const cv::Vec3d q = -(rt * p);
-  return cv::Matx44d(rt(0, 0), rt(0, 1), rt(0, 2), q[0], rt(1, 0), rt(1, 1), rt(1, 2), q[1], rt(2, 0), rt(2, 1), rt(2, 2),
-                     q[2], 0, 0, 0, 1);
+  return cv::Matx44d(rt(0, 0), rt(0, 1), rt(0, 2), q[0], rt(1, 0), rt(1, 1), rt(1, 2), q[1], rt(2, 0), rt(2, 1),
+                     rt(2, 2), q[2], 0, 0, 0, 1);
 }
 
 cv::Matx44d fromRotationTranslation(const cv::Matx33d& r, const cv::Vec3d& t)
 {
-  return cv::Matx44d(r(0, 0), r(0, 1), r(0, 2), t[0], r(1, 0), r(1, 1), r(1, 2), t[1], r(2, 0), r(2, 1), r(2, 2), t[2], 0,
-                     0, 0, 1);
+  return cv::Matx44d(r(0, 0), r(0, 1), r(0, 2), t[0], r(1, 0), r(1, 1), r(1, 2), t[1], r(2, 0), r(2, 1), r(2, 2), t[2],
+                     0, 0, 0, 1);
 }
 
 // Vicon world_T_body of each pair, from gt_poses.txt (qw qx qy qz tx ty tz).
@@ -145,9 +144,9 @@ openable::PinholeCamera EurocRevisits::camera_;
 
 struct PoseError
 {
-  double rotation_deg;     // angle of R_true^T R_est
-  double translation_m;    // |t_est - t_true|
-  double direction_deg;    // angle between t_est and t_true
+  double rotation_deg;   // angle of R_true^T R_est
+  double translation_m;  // |t_est - t_true|
+  double direction_deg;  // angle between t_est and t_true
 };
 
 PoseError compare(const openable::Verification& v, const cv::Matx44d& truth)
@@ -159,10 +158,11 @@ PoseError compare(const openable::Verification& v, const cv::Matx44d& truth)
   e.rotation_deg = angleDeg(rt.t() * v.rotation);
   e.translation_m = cv::norm(v.translation - tt);
   e.direction_deg = std::acos(std::max(-1.0, std::min(1.0, c))) * 180.0 / CV_PI;
-  std::printf("  %s, matches %d, inliers %d, rms %.3f px, parallax %.2f deg; true rotation %.2f deg, |t| %.3f m; "
-              "errors: rotation %.3f deg, translation %.4f m, direction %.2f deg (|t| est %.3f m)\n",
-              openable::toString(v.status), v.matches, v.inliers, v.rms_error_px, v.median_parallax_deg, angleDeg(rt),
-              cv::norm(tt), e.rotation_deg, e.translation_m, e.direction_deg, cv::norm(v.translation));
+  std::printf(
+      "  %s, matches %d, inliers %d, rms %.3f px, parallax %.2f deg; true rotation %.2f deg, |t| %.3f m; "
+      "errors: rotation %.3f deg, translation %.4f m, direction %.2f deg (|t| est %.3f m)\n",
+      openable::toString(v.status), v.matches, v.inliers, v.rms_error_px, v.median_parallax_deg, angleDeg(rt),
+      cv::norm(tt), e.rotation_deg, e.translation_m, e.direction_deg, cv::norm(v.translation));
   return e;
 }
 
@@ -248,8 +248,8 @@ TEST_F(EurocRevisits, MonoRevisitAcceptedWithVicon)
 TEST_F(EurocRevisits, NonRevisitRejected)
 {
   openable::GeometricVerifier stereo(camera_);
-  const auto vs = stereo.verify(stereo.extract(left_rect_[2], right_rect_[2], 2),
-                                stereo.extract(left_rect_[0], right_rect_[0], 0));
+  const auto vs =
+      stereo.verify(stereo.extract(left_rect_[2], right_rect_[2], 2), stereo.extract(left_rect_[0], right_rect_[0], 0));
   EXPECT_FALSE(vs.accepted());
   EXPECT_EQ(vs.status, openable::VerificationStatus::TooFewMatches) << vs.reason;
   EXPECT_NE(vs.reason.find("< 30"), std::string::npos) << vs.reason;
@@ -259,7 +259,7 @@ TEST_F(EurocRevisits, NonRevisitRejected)
   EXPECT_FALSE(vm.accepted());
   EXPECT_LE(vm.matches, 10);
   // Every other cross-place pair as well.
-  for (const auto& p : { std::make_pair(1, 2), std::make_pair(1, 3), std::make_pair(3, 0) })
+  for (const auto& p : {std::make_pair(1, 2), std::make_pair(1, 3), std::make_pair(3, 0)})
   {
     const auto v = stereo.verify(stereo.extract(left_rect_[p.first], right_rect_[p.first]),
                                  stereo.extract(left_rect_[p.second], right_rect_[p.second]));
@@ -269,7 +269,7 @@ TEST_F(EurocRevisits, NonRevisitRejected)
 
 TEST_F(EurocRevisits, IdenticalImagesRejected)
 {
-  for (const auto& camera : { camera_, monoOf(camera_) })
+  for (const auto& camera : {camera_, monoOf(camera_)})
   {
     openable::GeometricVerifier verifier(camera);
     const auto f = verifier.extract(left_rect_[0], right_rect_[0]);

@@ -35,7 +35,7 @@ TEST(Hamming, EveryKernelEqualsNaiveBitCountOnRandomDataOfManyLengths)
 TEST(Hamming, RowKernelsEqualPairwiseDistancesWithStride)
 {
   std::mt19937_64 rng(11);
-  for (size_t words : { 1u, 3u, 4u, 8u, 22u, 44u })
+  for (size_t words : {1u, 3u, 4u, 8u, 22u, 44u})
   {
     const size_t stride = words + 2;  // rows need not be packed
     const size_t count = 37;
@@ -56,8 +56,8 @@ TEST(Hamming, BestKernelIsTheLastSupportedAndPortableAlwaysExists)
   const auto kernels = supportedKernels();
   EXPECT_EQ(kernels.front(), HammingKernel::kPortable);
   EXPECT_EQ(bestKernel(), kernels.back());
-  for (HammingKernel k : { HammingKernel::kPortable, HammingKernel::kPopcnt, HammingKernel::kAvx2,
-                           HammingKernel::kAvx512Vpopcntdq })
+  for (HammingKernel k :
+       {HammingKernel::kPortable, HammingKernel::kPopcnt, HammingKernel::kAvx2, HammingKernel::kAvx512Vpopcntdq})
     EXPECT_FALSE(kernelName(k).empty());
 }
 
@@ -80,8 +80,8 @@ TEST(Hamming, UnsupportedKernelIsAClearError)
 
 TEST(Hamming, L2DistanceKnownAnswer)
 {
-  const float a[] = { 0, 0, 0 };
-  const float b[] = { 1, 2, 2 };
+  const float a[] = {0, 0, 0};
+  const float b[] = {1, 2, 2};
   EXPECT_FLOAT_EQ(l2Distance(a, b, 3), 3.0f);
   EXPECT_FLOAT_EQ(l2Distance(b, b, 3), 0.0f);
 }

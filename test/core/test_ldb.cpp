@@ -2,7 +2,6 @@
 
 #include <array>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
@@ -19,7 +18,8 @@ namespace
 std::vector<uint64_t> naiveLdb(const cv::Mat& patch)
 {
   std::vector<uint64_t> words(wordsForBits(kLdbBits), 0);
-  auto mean = [&patch](int x0, int y0, int x1, int y1) {
+  auto mean = [&patch](int x0, int y0, int x1, int y1)
+  {
     double s = 0;
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x)
@@ -33,11 +33,13 @@ std::vector<uint64_t> naiveLdb(const cv::Mat& patch)
     for (int r = 0; r < n; ++r)
       for (int c = 0; c < n; ++c)
       {
-        const int x0 = int(std::lround(double(c) * patch.cols / n)), x1 = int(std::lround(double(c + 1) * patch.cols / n));
-        const int y0 = int(std::lround(double(r) * patch.rows / n)), y1 = int(std::lround(double(r + 1) * patch.rows / n));
+        const int x0 = int(std::lround(double(c) * patch.cols / n)),
+                  x1 = int(std::lround(double(c + 1) * patch.cols / n));
+        const int y0 = int(std::lround(double(r) * patch.rows / n)),
+                  y1 = int(std::lround(double(r + 1) * patch.rows / n));
         const int xm = (x0 + x1) / 2, ym = (y0 + y1) / 2;
-        f.push_back({ mean(x0, y0, x1, y1), mean(xm, y0, x1, y1) - mean(x0, y0, xm, y1),
-                      mean(x0, ym, x1, y1) - mean(x0, y0, x1, ym) });
+        f.push_back({mean(x0, y0, x1, y1), mean(xm, y0, x1, y1) - mean(x0, y0, xm, y1),
+                     mean(x0, ym, x1, y1) - mean(x0, y0, x1, ym)});
       }
     for (size_t a = 0; a < f.size(); ++a)
       for (size_t b = a + 1; b < f.size(); ++b)
@@ -94,7 +96,7 @@ TEST(Ldb, FlatPatchHasNoBitSet)
 TEST(Ldb, EqualsNaivePixelByPixelReferenceOnRandomPatches)
 {
   cv::RNG rng(42);
-  for (int size : { 10, 16, 33, 64, 97 })
+  for (int size : {10, 16, 33, 64, 97})
     for (int trial = 0; trial < 5; ++trial)
     {
       cv::Mat patch(size, size, CV_32F);
@@ -148,12 +150,12 @@ TEST(Ldb, SmallPatchOrWrongTypeIsAClearError)
   EXPECT_THROW(ldb(cv::Mat(16, 16, CV_16U, cv::Scalar(0))), Error);
   Config c;
   c.patch_size = 8;  // allowed by the config, too small for LDB
-  EXPECT_THROW(FrameDescriber{ c }, Error);
+  EXPECT_THROW(FrameDescriber{c}, Error);
 }
 
 TEST(Ldb, SameRealPlaceIsCloserThanOtherPlaces)
 {
-  const FrameDescriber describer{ Config() };
+  const FrameDescriber describer{Config()};
   const auto left = describer.describeImage(openable_test::gardensPoint("day_left", 100));
   const auto right = describer.describeImage(openable_test::gardensPoint("day_right", 100));
   const auto other = describer.describeImage(openable_test::gardensPoint("day_right", 10));

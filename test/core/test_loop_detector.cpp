@@ -148,7 +148,7 @@ TEST(LoopDetector, UpdateMatchingChangesLiveKeysAndRefusesDescriptorKeys)
 
 TEST(LoopDetector, ResetForgetsHistoryButKeepsIdsIncreasing)
 {
-  LoopDetector detector{ Config() };
+  LoopDetector detector{Config()};
   std::mt19937_64 rng(10);
   for (int i = 0; i < 5; ++i)
     detector.process(openable_test::randomWords(rng, 22));
@@ -161,7 +161,7 @@ TEST(LoopDetector, ResetForgetsHistoryButKeepsIdsIncreasing)
 
 TEST(LoopDetector, WrongDescriptorSizeIsAClearError)
 {
-  LoopDetector detector{ Config() };
+  LoopDetector detector{Config()};
   EXPECT_THROW(detector.process(FrameDescriptor(3)), Error);
 }
 
@@ -200,7 +200,8 @@ TEST(LoopDetector, MinSequenceLengthLeavesPartialSequencesOut)
 TEST(LoopDetector, AcceptanceNeedsAtLeastOneGateAndEverySetGate)
 {
   const auto frames = revisitingStream();
-  auto acceptedAt70 = [&frames](double threshold, double min_uniqueness) {
+  auto acceptedAt70 = [&frames](double threshold, double min_uniqueness)
+  {
     Config c;
     c.sequence_length = 5;
     c.exclusion_window = 20;
@@ -212,9 +213,9 @@ TEST(LoopDetector, AcceptanceNeedsAtLeastOneGateAndEverySetGate)
       d = detector.process(frames[i]);
     return d.accepted;
   };
-  EXPECT_FALSE(acceptedAt70(-1, 0.0));   // no gate: nothing is accepted
-  EXPECT_TRUE(acceptedAt70(0.2, 0.0));   // distance gate only
-  EXPECT_TRUE(acceptedAt70(-1, 0.5));    // uniqueness gate only (a revisit is very unique)
+  EXPECT_FALSE(acceptedAt70(-1, 0.0));     // no gate: nothing is accepted
+  EXPECT_TRUE(acceptedAt70(0.2, 0.0));     // distance gate only
+  EXPECT_TRUE(acceptedAt70(-1, 0.5));      // uniqueness gate only (a revisit is very unique)
   EXPECT_FALSE(acceptedAt70(0.001, 0.5));  // both set: the distance gate fails
   EXPECT_FALSE(acceptedAt70(-1, 0.999));   // uniqueness gate fails
 }

@@ -1,11 +1,10 @@
 // openable_offline end to end: the command line other tools and checks rely on.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sys/wait.h>
-
 #include <opencv2/imgcodecs.hpp>
 
 #include "openable/npy.h"
@@ -24,7 +23,7 @@ struct Result
 Result run(const std::string& arguments)
 {
   const std::string command = std::string(OPENABLE_OFFLINE_BINARY) + " " + arguments + " 2>&1";
-  Result r{ -1, "" };
+  Result r{-1, ""};
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe)
     return r;
@@ -59,8 +58,8 @@ TEST(OfflineTool, DayLeftVsNightRightWritesA200By200Matrix)
   const cv::Mat m = openable::readNpy(out + "/distance_matrix.npy");
   EXPECT_EQ(m.rows, 200);
   EXPECT_EQ(m.cols, 200);
-  for (const char* file : { "distance_matrix.png", "distance_matrix_thresholded.png", "loop_closures.csv",
-                            "timings.json" })
+  for (const char* file :
+       {"distance_matrix.png", "distance_matrix_thresholded.png", "loop_closures.csv", "timings.json"})
     EXPECT_TRUE(fs::exists(out + "/" + file)) << file;
   std::ifstream csv(out + "/loop_closures.csv");
   std::string header;
@@ -68,8 +67,8 @@ TEST(OfflineTool, DayLeftVsNightRightWritesA200By200Matrix)
   EXPECT_EQ(header, "query,match,distance");
   std::ifstream json(out + "/timings.json");
   const std::string timings((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
-  for (const char* key : { "\"preprocess\"", "\"describe\"", "\"match\"", "\"frames\": 400", "\"database_bytes\"",
-                           "per_frame_ms" })
+  for (const char* key :
+       {"\"preprocess\"", "\"describe\"", "\"match\"", "\"frames\": 400", "\"database_bytes\"", "per_frame_ms"})
     EXPECT_NE(timings.find(key), std::string::npos) << key;
   EXPECT_FALSE(cv::imread(out + "/distance_matrix.png").empty());
 }
@@ -97,14 +96,14 @@ TEST(OfflineTool, BadConfigurationGivesOneLineReasonAndNonZeroExit)
     std::string args, expected;
   };
   const std::vector<Case> cases = {
-    { "--config " + config() + ref + " --output " + out + " --set descriptor=NOPE", "expected LDB" },
-    { "--config " + config() + ref + " --output " + out + " --set sequence_length=0", "sequence_length" },
-    { "--config " + config() + ref + " --output " + out + " --set threshold=2", "threshold" },
-    { "--config " + config() + ref + " --output " + out + " --set no_such_key=1", "unknown configuration key" },
-    { "--config /nonexistent.yaml" + ref + " --output " + out, "cannot read configuration" },
-    { "--config " + config() + " --reference /nonexistent --output " + out, "does not exist" },
-    { "--config " + config() + ref + " --output /proc/forbidden", "cannot" },
-    { "--config " + config() + ref, "required" },
+      {"--config " + config() + ref + " --output " + out + " --set descriptor=NOPE", "expected LDB"},
+      {"--config " + config() + ref + " --output " + out + " --set sequence_length=0", "sequence_length"},
+      {"--config " + config() + ref + " --output " + out + " --set threshold=2", "threshold"},
+      {"--config " + config() + ref + " --output " + out + " --set no_such_key=1", "unknown configuration key"},
+      {"--config /nonexistent.yaml" + ref + " --output " + out, "cannot read configuration"},
+      {"--config " + config() + " --reference /nonexistent --output " + out, "does not exist"},
+      {"--config " + config() + ref + " --output /proc/forbidden", "cannot"},
+      {"--config " + config() + ref, "required"},
   };
   for (const auto& c : cases)
   {
@@ -125,7 +124,8 @@ TEST(OfflineTool, UnreadableImageInFolderIsReportedAndSkipped)
     fs::copy_file(openable_test::sharedData("gardens_point/day_right/Image00" + std::to_string(i) + ".jpg"),
                   in + "/Image00" + std::to_string(i) + ".jpg");
   std::ofstream(in + "/Image002.jpg", std::ios::trunc) << "not a jpeg";
-  const Result r = run("--config " + config() + " --reference " + in + " --output " + out + " --set exclusion_window=0");
+  const Result r =
+      run("--config " + config() + " --reference " + in + " --output " + out + " --set exclusion_window=0");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("Image002.jpg"), std::string::npos) << r.output;
   const cv::Mat m = openable::readNpy(out + "/distance_matrix.npy");

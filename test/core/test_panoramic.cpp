@@ -39,7 +39,8 @@ struct Drive
 
 const Drive& drive(const FrameDescriber& describer)
 {
-  static const Drive d = [&describer] {
+  static const Drive d = [&describer]
+  {
     Drive out;
     for (int place = 0; place < kPlaces; ++place)
       out.forward.push_back(describer.describeImage(panorama("day_right", place, 0)));

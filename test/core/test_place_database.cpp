@@ -39,7 +39,7 @@ PlaceDatabase filled(size_t frames, size_t capacity = 0)
     info.session = 3;
     info.source = "Image" + std::to_string(i) + ".jpg";
     info.has_pose = i % 2 == 0;
-    info.pose = { double(i), 2, 3, 0, 0, 0, 1 };
+    info.pose = {double(i), 2, 3, 0, 0, 0, 1};
     db.add(openable_test::randomWords(rng, 22), info);
   }
   return db;
@@ -129,7 +129,8 @@ TEST(PlaceDatabase, CorruptTruncatedAndForeignFilesAreRefusedWithReasons)
   filled(10).save(path);
   const std::string good = readAll(path);
 
-  auto expectRefused = [&](const std::string& bytes, const std::string& reason) {
+  auto expectRefused = [&](const std::string& bytes, const std::string& reason)
+  {
     const std::string bad = dir + "/bad.bin";
     writeAll(bad, bytes);
     try

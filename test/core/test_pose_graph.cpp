@@ -63,9 +63,7 @@ std::map<int, int> loadLoops(const std::string& path, const std::vector<Eigen::I
 class Gaussian
 {
 public:
-  explicit Gaussian(uint32_t seed) : engine_(seed)
-  {
-  }
+  explicit Gaussian(uint32_t seed) : engine_(seed) {}
   double operator()()
   {
     const double u1 = (engine_() + 1.0) / 4294967297.0;
@@ -285,7 +283,8 @@ TEST(PoseGraph, SmallGraphExactAndBadInput)
   EXPECT_THROW(graph.pose(4), openable::Error);
   EXPECT_THROW(openable::PoseGraph::informationFromCovariance(openable::Matrix6d::Zero()), openable::Error);
   openable::Matrix6d covariance = openable::Matrix6d::Identity() * 0.01;
-  EXPECT_TRUE(openable::PoseGraph::informationFromCovariance(covariance).isApprox(openable::Matrix6d::Identity() * 100.0));
+  EXPECT_TRUE(
+      openable::PoseGraph::informationFromCovariance(covariance).isApprox(openable::Matrix6d::Identity() * 100.0));
   openable::PoseGraphOptions bad;
   bad.loop_loss_scale = 0.0;
   EXPECT_THROW(openable::PoseGraph bad_graph(bad), openable::Error);

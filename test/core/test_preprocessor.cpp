@@ -1,7 +1,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
@@ -54,9 +53,9 @@ TEST(IlluminationInvariant, GreyInputIsAClearError)
 
 TEST(Preprocessor, BadImagesAreClearErrors)
 {
-  const Preprocessor p{ Config() };
-  const std::vector<cv::Mat> bad = { cv::Mat(), cv::Mat(10, 10, CV_16UC1), cv::Mat(10, 10, CV_8UC2),
-                                     cv::Mat(10, 10, CV_32FC1), cv::Mat(10, 10, CV_8UC(5)) };
+  const Preprocessor p{Config()};
+  const std::vector<cv::Mat> bad = {cv::Mat(), cv::Mat(10, 10, CV_16UC1), cv::Mat(10, 10, CV_8UC2),
+                                    cv::Mat(10, 10, CV_32FC1), cv::Mat(10, 10, CV_8UC(5))};
   for (const auto& image : bad)
   {
     try

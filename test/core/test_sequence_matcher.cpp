@@ -46,7 +46,7 @@ struct BruteForce
       s += metric.distance(queries[q].data(), reference[r].data());
       ++n;
     }
-    return { s, n };
+    return {s, n};
   }
 };
 
@@ -72,15 +72,15 @@ void expectRowMatches(const SequenceMatcher& m, const BruteForce& bf, long t, in
 TEST(SequenceMatcher, LoopClosureModeEqualsBruteForce)
 {
   std::mt19937_64 rng(3);
-  for (int L : { 1, 2, 3, 7, 20 })
-    for (int exclusion : { 0, 1, 5, 13 })
-      for (bool bidirectional : { false, true })
+  for (int L : {1, 2, 3, 7, 20})
+    for (int exclusion : {0, 1, 5, 13})
+      for (bool bidirectional : {false, true})
       {
         const auto layout = binaryLayout(3);
         const FrameMetric metric(layout);
         PlaceDatabase db(layout);
         SequenceMatcher m(layout, L, bidirectional);
-        BruteForce bf{ metric, {}, {}, [exclusion](long q, long r) { return r <= q - 1 - exclusion; } };
+        BruteForce bf{metric, {}, {}, [exclusion](long q, long r) { return r <= q - 1 - exclusion; }};
         for (long t = 0; t < 60; ++t)
         {
           // Repeated descriptors make ties and zero distances, the cases where mistakes hide.
@@ -99,13 +99,13 @@ TEST(SequenceMatcher, LoopClosureModeEqualsBruteForce)
 TEST(SequenceMatcher, LocalisationModeEqualsBruteForce)
 {
   std::mt19937_64 rng(5);
-  for (int L : { 1, 4, 10, 45 })
-    for (bool bidirectional : { false, true })
+  for (int L : {1, 4, 10, 45})
+    for (bool bidirectional : {false, true})
     {
       const auto layout = binaryLayout(2);
       const FrameMetric metric(layout);
       PlaceDatabase map(layout);
-      BruteForce bf{ metric, {}, {}, [](long, long) { return true; } };
+      BruteForce bf{metric, {}, {}, [](long, long) { return true; }};
       for (int i = 0; i < 40; ++i)
       {
         bf.reference.push_back(openable_test::randomWords(rng, 2));
@@ -128,7 +128,7 @@ TEST(SequenceMatcher, PanoramicShiftedMetricEqualsBruteForce)
   const FrameMetric metric(layout);
   PlaceDatabase db(layout);
   SequenceMatcher m(layout, 5, true);
-  BruteForce bf{ metric, {}, {}, [](long q, long r) { return r <= q - 1 - 2; } };
+  BruteForce bf{metric, {}, {}, [](long q, long r) { return r <= q - 1 - 2; }};
   for (long t = 0; t < 30; ++t)
   {
     bf.queries.push_back(openable_test::randomWords(rng, 4));
@@ -146,7 +146,7 @@ TEST(SequenceMatcher, ChangingLengthRestartsSequences)
   const FrameMetric metric(layout);
   PlaceDatabase db(layout);
   SequenceMatcher m(layout, 6, true);
-  BruteForce bf{ metric, {}, {}, [](long q, long r) { return r <= q - 1; } };
+  BruteForce bf{metric, {}, {}, [](long q, long r) { return r <= q - 1; }};
   long start = 0;
   int L = 6;
   for (long t = 0; t < 70; ++t)
@@ -173,7 +173,7 @@ TEST(SequenceMatcher, BoundedHistoryKeepsFullSequencesExact)
   const int L = 4, exclusion = 3;
   PlaceDatabase db(layout, 32);  // evicts 2 frames at a time when full
   SequenceMatcher m(layout, L, false);
-  BruteForce bf{ metric, {}, {}, [](long q, long r) { return r <= q - 1 - exclusion; } };
+  BruteForce bf{metric, {}, {}, [](long q, long r) { return r <= q - 1 - exclusion; }};
   size_t evictions = 0;
   for (long t = 0; t < 200; ++t)
   {
@@ -227,6 +227,6 @@ TEST(SequenceMatcher, BadInput)
   EXPECT_THROW(SequenceMatcher(layout, 70000, false), Error);
   SequenceMatcher m(layout, 2, false);
   PlaceDatabase other(binaryLayout(2));
-  const uint64_t q[2] = { 0, 0 };
+  const uint64_t q[2] = {0, 0};
   EXPECT_THROW(m.match(q, other, 0), Error);
 }

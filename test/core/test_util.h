@@ -1,11 +1,10 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 namespace openable_test
 {

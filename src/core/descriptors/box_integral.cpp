@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 namespace openable
@@ -26,8 +25,7 @@ double BoxIntegral::at(double x, double y) const
   const double fx = x - x0, fy = y - y0;
   const double* top = integral_.ptr<double>(y0);
   const double* bottom = integral_.ptr<double>(y0 + 1);
-  return (1.0 - fy) * ((1.0 - fx) * top[x0] + fx * top[x0 + 1]) +
-         fy * ((1.0 - fx) * bottom[x0] + fx * bottom[x0 + 1]);
+  return (1.0 - fy) * ((1.0 - fx) * top[x0] + fx * top[x0 + 1]) + fy * ((1.0 - fx) * bottom[x0] + fx * bottom[x0 + 1]);
 }
 
 }  // namespace descriptors

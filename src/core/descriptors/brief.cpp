@@ -43,7 +43,8 @@ private:
 std::vector<float> makeUnitPattern()
 {
   PatternRandom random;
-  auto coordinate = [&random] {
+  auto coordinate = [&random]
+  {
     for (;;)
     {
       const double c = random.gaussian() / 5.0;
@@ -118,7 +119,8 @@ void BriefExtractor::describeBinary(const Patch& patch, uint64_t* words) const
       rows[size_t(y) * n + x] = s;
     }
   }
-  auto smoothed = [&](int x, int y) {
+  auto smoothed = [&](int x, int y)
+  {
     double s = 0.0;
     for (int k = -radius; k <= radius; ++k)
       s += kernel_[k + radius] * rows[size_t(reflect(y + k, n)) * n + x];

@@ -8,8 +8,9 @@ namespace openable
 void DldbExtractor::describeBinary(const Patch& patch, uint64_t* words) const
 {
   if (patch.disparity.empty() || patch.valid.empty())
-    throw Error("D-LDB needs a disparity patch and its validity mask (camera_type stereo: describe a left image "
-                "with its right image or disparity)");
+    throw Error(
+        "D-LDB needs a disparity patch and its validity mask (camera_type stereo: describe a left image "
+        "with its right image or disparity)");
   if (patch.disparity.type() != CV_32FC1 || patch.disparity.size() != patch.intensity.size())
     throw Error("D-LDB needs a CV_32F disparity patch of the intensity patch's size");
   if (patch.valid.type() != CV_8UC1 || patch.valid.size() != patch.intensity.size())

@@ -27,7 +27,7 @@ constexpr double kOuterRadius = 1.0 / (1.0 + kSigmaPerRadius);
 void unitCircle(int step30, double* c, double* s)
 {
   const double h = std::sqrt(3.0) / 2.0;
-  static const double cosines[12] = { 1.0, h, 0.5, 0.0, -0.5, -h, -1.0, -h, -0.5, 0.0, 0.5, h };
+  static const double cosines[12] = {1.0, h, 0.5, 0.0, -0.5, -h, -1.0, -h, -0.5, 0.0, 0.5, h};
   *c = cosines[step30 % 12];
   *s = cosines[(step30 + 9) % 12];  // sin(a) = cos(a - 90 degrees)
 }
@@ -75,14 +75,14 @@ FreakExtractor::FreakExtractor(int patch_size) : patch_size_(patch_size)
   double radius = kOuterRadius * half;
   for (int r = 1; r < kRings; ++r)
     radius /= kRingRatio;
-  fields_.push_back({ half, half, kSigmaPerRadius * radius, 0 });  // centre field, as fine as ring 1
+  fields_.push_back({half, half, kSigmaPerRadius * radius, 0});  // centre field, as fine as ring 1
   for (int ring = 1; ring <= kRings; ++ring, radius *= kRingRatio)
     for (int j = 0; j < kPerRing; ++j)
     {
       // Alternate rings are turned by half a step (30 degrees) so fields of neighbouring rings interleave.
       double c, s;
       unitCircle(2 * j + (ring % 2), &c, &s);
-      fields_.push_back({ half + radius * c, half + radius * s, kSigmaPerRadius * radius, ring });
+      fields_.push_back({half + radius * c, half + radius * s, kSigmaPerRadius * radius, ring});
     }
 }
 

@@ -1,5 +1,4 @@
 #include <cstring>
-
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 

@@ -1,6 +1,5 @@
 // ORB, BRISK and SIFT from OpenCV's features2d, computed for one keypoint at the patch centre.
 #include <cstring>
-
 #include <opencv2/features2d.hpp>
 
 #include "openable/descriptors.h"
@@ -33,7 +32,7 @@ int siftMarginFor(int patch_size)
 cv::Mat computeOne(cv::Feature2D& extractor, const cv::Mat& image, const cv::KeyPoint& key, const std::string& name,
                    int patch_size)
 {
-  std::vector<cv::KeyPoint> keys{ key };
+  std::vector<cv::KeyPoint> keys{key};
   cv::Mat out;
   extractor.compute(image, keys, out);
   if (keys.size() != 1 || out.rows != 1)
@@ -86,7 +85,7 @@ BriskExtractor::BriskExtractor(int patch_size) : patch_size_(patch_size)
   // 5.85 / 9.18 of the outer radius), scaled so that the outer ring plus its smoothing (1.3 r sin(pi / 20))
   // reaches the patch border.
   const float unit = 0.85f;
-  const std::vector<float> shape = { 0.0f, 2.9f * unit, 4.9f * unit, 7.4f * unit, 10.8f * unit };
+  const std::vector<float> shape = {0.0f, 2.9f * unit, 4.9f * unit, 7.4f * unit, 10.8f * unit};
   const float sin_pi_20 = 0.156434465f;  // sin(pi / 20) as a literal: no libm rounding in the pattern
   const float outer_extent = shape.back() * (1.0f + 1.3f * sin_pi_20);
   const float k = 0.5f * patch_size / outer_extent;
@@ -98,7 +97,7 @@ BriskExtractor::BriskExtractor(int patch_size) : patch_size_(patch_size)
   // With dMin beyond any distance in the pattern there are no long pairs, the estimated gradient is (0, 0),
   // atan2 gives 0 and the descriptor is upright, as the paper's global description wants (267 bits apart).
   const float no_long_pairs = 1e6f;
-  brisk_ = cv::BRISK::create(radii, std::vector<int>{ 1, 10, 14, 15, 20 }, 5.85f * k, no_long_pairs);
+  brisk_ = cv::BRISK::create(radii, std::vector<int>{1, 10, 14, 15, 20}, 5.85f * k, no_long_pairs);
   if (brisk_->descriptorSize() * 8 != length())
     throw Error("BRISK pattern for patch_size " + std::to_string(patch_size) + " gives " +
                 std::to_string(brisk_->descriptorSize() * 8) + " bits; expected 512");
@@ -128,8 +127,7 @@ void SiftExtractor::describeFloat(const Patch& patch, float* values) const
   const int margin = siftMarginFor(patch_size_);
   const cv::Mat image = paddedEightBit(patch, name(), patch_size_, margin);
   // SIFT's 4x4 histograms are 3 * size / 2 pixels wide each: size = patch_size / 6 makes them tile the patch.
-  const cv::Mat d =
-      computeOne(*sift_, image, centreKey(patch_size_, margin, patch_size_ / 6.0f), name(), patch_size_);
+  const cv::Mat d = computeOne(*sift_, image, centreKey(patch_size_, margin, patch_size_ / 6.0f), name(), patch_size_);
   if (d.cols != length() || d.type() != CV_32F)
     throw Error("SIFT returned " + std::to_string(d.cols) + " values; expected 128 floats");
   std::memcpy(values, d.ptr<float>(), sizeof(float) * length());

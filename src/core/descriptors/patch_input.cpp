@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstring>
-
 #include <opencv2/core.hpp>
 
 #include "openable/error.h"
@@ -18,8 +17,8 @@ void checkIntensityPatch(const std::string& descriptor, const cv::Mat& intensity
                 (intensity.empty() ? std::string("an empty image") : "type " + std::to_string(intensity.type())));
   if (intensity.cols != patch_size || intensity.rows != patch_size)
     throw Error(descriptor + " was built for patch_size " + std::to_string(patch_size) + " and got a " +
-                std::to_string(intensity.cols) + "x" + std::to_string(intensity.rows) +
-                " patch; expected " + std::to_string(patch_size) + "x" + std::to_string(patch_size));
+                std::to_string(intensity.cols) + "x" + std::to_string(intensity.rows) + " patch; expected " +
+                std::to_string(patch_size) + "x" + std::to_string(patch_size));
   if (!cv::checkRange(intensity))
     throw Error(descriptor + " got a patch with NaN or infinite values; expected finite intensities");
 }

@@ -19,7 +19,8 @@ constexpr double kWeightSigma = 3.3;
 /// The Gaussian weight of sample (i, j) depends on the indices only, not on the patch size.
 const std::vector<double>& sampleWeights()
 {
-  static const std::vector<double> weights = [] {
+  static const std::vector<double> weights = []
+  {
     std::vector<double> w(kSamples * kSamples);
     for (int j = 0; j < kSamples; ++j)
       for (int i = 0; i < kSamples; ++i)
