@@ -15,4 +15,4 @@ echo
 echo "first accepted loop closures (query frame, matched map frame, normalised distance):"
 head -n 6 "$out/loop_closures.csv" | column -t -s,
 echo
-echo "look at: $out/distance_matrix.png (the dark diagonal: each night frame matched with its day twin)"
+echo "look at: $out/distance_matrix.png (the magenta diagonal: each night frame matched with its day twin)"
