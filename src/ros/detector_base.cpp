@@ -49,6 +49,25 @@ geometry_msgs::Point position(const std::array<double, 7>& pose)
   p.z = pose[2];
   return p;
 }
+
+/// One marker of loop_markers: ADD when it has something to show, else DELETE (clears an old one in rviz).
+visualization_msgs::Marker makeMarker(const std_msgs::Header& header, const std::string& ns, int id, int type,
+                                      bool visible, double width, float r, float g, float b)
+{
+  visualization_msgs::Marker m;
+  m.header = header;
+  m.ns = ns;
+  m.id = id;
+  m.type = type;
+  m.action = visible ? visualization_msgs::Marker::ADD : visualization_msgs::Marker::DELETE;
+  m.pose.orientation.w = 1.0;
+  m.scale.x = width;
+  m.color.r = r;
+  m.color.g = g;
+  m.color.b = b;
+  m.color.a = 1.0f;
+  return m;
+}
 }  // namespace
 
 DetectorBase::DetectorBase() : view_(512) {}
@@ -666,34 +685,18 @@ void DetectorBase::publishMarkersLocked(const std_msgs::Header& header, bool for
   }
   last_markers_time_ = now;
   auto markers = boost::make_shared<visualization_msgs::MarkerArray>();
-  visualization_msgs::Marker trajectory;
-  trajectory.header.frame_id = fixed_frame_;
-  trajectory.header.stamp = header.stamp;
-  trajectory.ns = "trajectory";
-  trajectory.id = 0;
-  trajectory.type = visualization_msgs::Marker::LINE_STRIP;
-  trajectory.action = trajectory_.size() >= 2 ? visualization_msgs::Marker::ADD : visualization_msgs::Marker::DELETE;
-  trajectory.pose.orientation.w = 1.0;
-  trajectory.scale.x = 0.05;
-  trajectory.color.r = 0.2f;
-  trajectory.color.g = 0.6f;
-  trajectory.color.b = 1.0f;
-  trajectory.color.a = 1.0f;
+  std_msgs::Header marker_header;
+  marker_header.frame_id = fixed_frame_;
+  marker_header.stamp = header.stamp;
+  using visualization_msgs::Marker;
+
+  Marker trajectory =
+      makeMarker(marker_header, "trajectory", 0, Marker::LINE_STRIP, trajectory_.size() >= 2, 0.05, 0.2f, 0.6f, 1.0f);
   trajectory.points.assign(trajectory_.begin(), trajectory_.end());
   markers->markers.push_back(trajectory);
 
-  visualization_msgs::Marker loops;
-  loops.header = trajectory.header;
-  loops.ns = "loop_closures";
-  loops.id = 1;
-  loops.type = visualization_msgs::Marker::LINE_LIST;
-  loops.action = loop_edges_.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
-  loops.pose.orientation.w = 1.0;
-  loops.scale.x = 0.08;
-  loops.color.r = 1.0f;
-  loops.color.g = 0.0f;
-  loops.color.b = 1.0f;
-  loops.color.a = 1.0f;
+  Marker loops =
+      makeMarker(marker_header, "loop_closures", 1, Marker::LINE_LIST, !loop_edges_.empty(), 0.08, 1.0f, 0.0f, 1.0f);
   for (const auto& edge : loop_edges_)
   {
     loops.points.push_back(edge.first);
@@ -701,21 +704,12 @@ void DetectorBase::publishMarkersLocked(const std_msgs::Header& header, bool for
   }
   markers->markers.push_back(loops);
 
-  visualization_msgs::Marker current;
-  current.header = trajectory.header;
-  current.ns = "current";
-  current.id = 2;
-  current.type = visualization_msgs::Marker::SPHERE;
-  current.action = trajectory_.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
-  current.pose.orientation.w = 1.0;
+  Marker current = makeMarker(marker_header, "current", 2, Marker::SPHERE, !trajectory_.empty(), 0.3, 1.0f, 0.8f, 0.0f);
   if (!trajectory_.empty())
   {
     current.pose.position = trajectory_.back();
   }
-  current.scale.x = current.scale.y = current.scale.z = 0.3;
-  current.color.r = 1.0f;
-  current.color.g = 0.8f;
-  current.color.a = 1.0f;
+  current.scale.y = current.scale.z = 0.3;
   markers->markers.push_back(current);
   markers_pub_.publish(visualization_msgs::MarkerArrayConstPtr(markers));
 }
