@@ -86,7 +86,7 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
   matcher_.match(descriptor.data(), database_, columns);
 
   // Top-k distinct places: repeatedly the smallest distance outside the windows of those already taken.
-  std::vector<float> row;
+  std::vector<float>& row = row_;  // reused: no allocation of N floats per frame
   matcher_.normalizedRow(row, nullptr, minTerms());
   const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
   const long window = config_.uniqueness_window;
