@@ -32,6 +32,14 @@ struct Config
   bool bidirectional = false;   ///< also match sequences driven in the opposite direction
   int max_history = 0;          ///< frames kept in the loop-closure history (0 = unbounded)
 
+  // Loop-closure decision (OnlineDetector): what must hold, besides the gates above, before a loop is published.
+  int min_candidates = 60;         ///< fewer full-sequence candidate places: "too early" (uniqueness needs rivals)
+  int consistent_frames = 4;       ///< this many consecutive frames must pass the gates with matches advancing
+                                   ///< together (1 = off)
+  int consistency_tolerance = 2;   ///< frames a match may deviate from advancing one place per frame
+  double exclusion_seconds = 0.0;  ///< loop-closure mode: frames stamped less than this before the query are
+                                   ///< never matched (0 = off; the frame window still applies)
+
   // Stereo (camera_type stereo): OpenCV StereoSGBM on the rectified pair, scaled to the input width.
   int stereo_num_disparities = 64;  ///< disparity search range at 640 px width (multiple of 16 after scaling)
   int stereo_block_size = 5;        ///< SGBM block size (odd, pixels)

@@ -26,6 +26,8 @@ struct Detection
 {
   uint64_t query_id = 0;
   bool has_candidates = false;  ///< false while nothing can be compared yet (start, exclusion window)
+  bool excluded = false;        ///< no candidates although frames are stored: all inside the exclusion
+  size_t candidates = 0;        ///< reference frames compared with a sequence long enough to be a candidate
   Candidate best;
   std::vector<Candidate> top;  ///< up to top_k distinct places, best first
   float uniqueness = 0.0f;     ///< 1 - best / second best (second best outside uniqueness_window); 1 without rival
@@ -35,7 +37,10 @@ struct Detection
 
 /// Adds frames, matches them and decides. Two modes:
 /// - loop closure (first constructor): each frame is matched against the stream's own past, except the
-///   last `exclusion_window` frames, then stored (bounded by max_history);
+///   last `exclusion_window` frames and those stamped less than `exclusion_seconds` before it, then stored
+///   (bounded by max_history). Only full sequences of L frames are candidates here: the partial chains at
+///   the start of a stream compare a few frames only and were the main source of false loops (measured,
+///   doc/results.md); min_sequence_length applies to localisation, where every query has a true match;
 /// - localisation (second constructor): each frame is matched against a fixed reference map, nothing is stored.
 ///
 /// The normalised distance is the mean per-frame distance of the sequence divided by the largest possible
@@ -80,7 +85,7 @@ public:
 
 private:
   Candidate candidateAt(size_t column) const;
-  size_t candidateColumns() const;
+  size_t candidateColumns(double stamp) const;
   int minTerms() const;
 
   Config config_;

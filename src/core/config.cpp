@@ -147,6 +147,19 @@ const std::vector<KeyAccess>& table()
               &Config::uniqueness_window),
       makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional),
       makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history),
+      makeKey("min_candidates",
+              "loop-closure decision: fewer full-sequence candidate places than this is 'too early' (frames)",
+              &Config::min_candidates),
+      makeKey("consistent_frames",
+              "loop-closure decision: consecutive frames that must pass the gates with matches advancing "
+              "together (1 = off)",
+              &Config::consistent_frames),
+      makeKey("consistency_tolerance",
+              "loop-closure decision: frames a match may deviate from advancing one place per frame",
+              &Config::consistency_tolerance),
+      makeKey("exclusion_seconds",
+              "loop-closure mode: frames stamped less than this before the query are never matched (s; 0 = off)",
+              &Config::exclusion_seconds),
       makeKey("stereo_num_disparities", "SGBM disparity range at 640 px width (pixels)",
               &Config::stereo_num_disparities),
       makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size),
@@ -272,6 +285,11 @@ std::vector<std::string> Config::validate() const
     bad("max_history", std::to_string(max_history),
         "0 (unbounded) or more than 2 * (sequence_length + exclusion_window) = " +
             std::to_string(2 * (sequence_length + exclusion_window)));
+  inRange("min_candidates", min_candidates, 0, 100000000);
+  inRange("consistent_frames", consistent_frames, 1, 1000);
+  inRange("consistency_tolerance", consistency_tolerance, 0, 1000);
+  if (!std::isfinite(exclusion_seconds) || exclusion_seconds < 0.0 || exclusion_seconds > 1e9)
+    bad("exclusion_seconds", formatDouble(exclusion_seconds), "a number of seconds in [0, 1e9]");
   inRange("stereo_num_disparities", stereo_num_disparities, 16, 1024);
   if (stereo_block_size < 1 || stereo_block_size > 31 || stereo_block_size % 2 == 0)
     bad("stereo_block_size", std::to_string(stereo_block_size), "an odd integer in [1, 31]");

@@ -46,15 +46,25 @@ LoopDetector::LoopDetector(const Config& config, PlaceDatabase reference_map)
 
 int LoopDetector::minTerms() const
 {
-  return config_.min_sequence_length == 0 ? config_.sequence_length : config_.min_sequence_length;
+  if (!localisation_ || config_.min_sequence_length == 0)
+    return config_.sequence_length;
+  return config_.min_sequence_length;
 }
 
-size_t LoopDetector::candidateColumns() const
+size_t LoopDetector::candidateColumns(double stamp) const
 {
   if (localisation_)
     return database_.size();
   const size_t excluded = static_cast<size_t>(config_.exclusion_window);
-  return database_.size() > excluded ? database_.size() - excluded : 0;
+  size_t columns = database_.size() > excluded ? database_.size() - excluded : 0;
+  if (config_.exclusion_seconds > 0.0 && stamp > 0.0)
+  {
+    // Stamps grow along the history (the caller refuses time jumps): drop the recent ones from the end.
+    const double newest_allowed = stamp - config_.exclusion_seconds;
+    while (columns > 0 && database_.info(columns - 1).stamp > newest_allowed)
+      --columns;
+  }
+  return columns;
 }
 
 Candidate LoopDetector::candidateAt(size_t column) const
@@ -82,7 +92,7 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
                 std::to_string(database_.layout().frameWords()) + " words");
   last_query_ = descriptor;
   Detection detection;
-  const size_t columns = candidateColumns();
+  const size_t columns = candidateColumns(info.stamp);
   matcher_.match(descriptor.data(), database_, columns);
 
   // Top-k distinct places: repeatedly the smallest distance outside the windows of those already taken.
@@ -99,6 +109,8 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
         best = c;
     if (best == row.size())
       break;
+    if (taken.empty())
+      detection.candidates = static_cast<size_t>(std::count_if(row.begin(), row.end(), [](float v) { return std::isfinite(v); }));
     taken.push_back(best);
     const size_t from = static_cast<size_t>(std::max<long>(0, long(best) - window));
     const size_t to = std::min(row.size(), best + static_cast<size_t>(window) + 1);
@@ -107,6 +119,7 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
   for (size_t i = 0; i < taken.size() && i < static_cast<size_t>(config_.top_k); ++i)
     detection.top.push_back(candidateAt(taken[i]));
 
+  detection.excluded = detection.top.empty() && !localisation_ && !database_.empty() && columns == 0;
   if (!detection.top.empty())
   {
     detection.has_candidates = true;

@@ -9,9 +9,11 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <unistd.h>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -20,12 +22,11 @@
 
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/frame_describer.h"
 #include "openable/image_source.h"
-#include "openable/loop_detector.h"
+#include "openable/online_detector.h"
+#include "openable/loop_decision.h"
 #include "openable/npy.h"
 #include "openable/render.h"
-#include "openable/stereo.h"
 
 namespace fs = std::filesystem;
 using openable::Error;
@@ -124,76 +125,60 @@ struct Timings
   size_t frames = 0;
 };
 
-/// Reads a traversal (and its right images in stereo mode) and describes every frame. Unreadable frames
-/// are reported and left out; `indices` keeps the file index of each described frame.
+/// Reads a traversal (and its right images in stereo mode) frame by frame. Frames are counted as they are
+/// decoded: a video container's frame count is never trusted.
 class TraversalReader
 {
 public:
-  TraversalReader(const std::string& path, const std::string& right_path, const openable::FrameDescriber& describer,
-                  const openable::Config& config)
-    : source_(path), describer_(describer), config_(config)
+  TraversalReader(const std::string& path, const std::string& right_path) : source_(path)
   {
     if (!right_path.empty())
     {
       right_ = std::make_unique<openable::ImageSource>(right_path);
-      if (right_->size() != source_.size())
+      if (!source_.isVideo() && !right_->isVideo() && right_->size() != source_.size())
         throw Error("left '" + path + "' has " + std::to_string(source_.size()) + " frames but right '" + right_path +
                     "' has " + std::to_string(right_->size()));
     }
   }
 
-  size_t size() const
+  /// The next frame's images into `input` (empty when unreadable); false at the end.
+  bool next(openable::FrameInput& input, Timings& t)
   {
-    return source_.size();
-  }
-
-  /// Next frame's descriptor; false at the end. `described` is false for an unreadable frame.
-  bool next(openable::FrameDescriptor& descriptor, std::string& name, bool& described, Timings& t)
-  {
-    cv::Mat image, right;
-    auto start = Clock::now();
-    if (!source_.next(image, name))
+    const auto start = Clock::now();
+    input = openable::FrameInput();
+    if (!source_.next(input.image, input.source))
       return false;
     std::string right_name;
-    if (right_)
-      right_->next(right, right_name);
+    if (right_ && !right_->next(input.right, right_name))
+      throw Error("the right images end before the left ones at '" + input.source + "'");
     t.read += msSince(start);
-    described = false;
-    try
-    {
-      start = Clock::now();
-      std::vector<openable::Patch> patches;
-      if (right_)
-      {
-        openable::checkStereoPair(image, right);
-        patches =
-            describer_.preprocessor().patchesWithDisparity(image, openable::disparityFromPair(image, right, config_));
-      }
-      else
-        patches = describer_.preprocessor().patches(image);
-      t.preprocess += msSince(start);
-      start = Clock::now();
-      descriptor = describer_.describe(patches);
-      t.describe += msSince(start);
-      described = true;
-    }
-    catch (const Error& e)
-    {
-      std::cerr << "warning: skipping " << name << ": " << e.what() << "\n";
-    }
-    catch (const cv::Exception& e)
-    {
-      std::cerr << "warning: skipping " << name << ": " << e.what() << "\n";
-    }
     return true;
   }
 
 private:
   openable::ImageSource source_;
   std::unique_ptr<openable::ImageSource> right_;
-  const openable::FrameDescriber& describer_;
-  const openable::Config& config_;
 };
+
+/// Describes or processes one frame; an unreadable or undescribable frame is reported and skipped.
+template <typename Step>
+bool tryFrame(const std::string& name, Step step)
+{
+  try
+  {
+    step();
+    return true;
+  }
+  catch (const Error& e)
+  {
+    std::cerr << "warning: skipping " << name << ": " << e.what() << "\n";
+  }
+  catch (const cv::Exception& e)
+  {
+    std::cerr << "warning: skipping " << name << ": " << e.what() << "\n";
+  }
+  return false;
+}
 
 void writePng(const std::string& path, const cv::Mat& image)
 {
@@ -219,115 +204,160 @@ std::string jsonStage(const char* name, double total, size_t frames)
   return out.str();
 }
 
+/// Output files are written into a hidden folder inside DIR and moved into DIR only when the whole run
+/// succeeded: a failed run leaves no partial set behind (and an earlier run's files stay as they were).
+class StagedOutput
+{
+public:
+  explicit StagedOutput(const std::string& dir) : dir_(dir)
+  {
+    std::error_code ec;
+    fs::create_directories(dir_, ec);
+    if (!fs::is_directory(dir_))
+      throw Error("cannot create output folder '" + dir + "'");
+    staging_ = dir_ / (".openable_offline." + std::to_string(::getpid()));
+    fs::remove_all(staging_, ec);
+    if (!fs::create_directory(staging_, ec))
+      throw Error("cannot write into output folder '" + dir + "'");
+  }
+  ~StagedOutput()
+  {
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+  }
+  std::string path(const std::string& name)
+  {
+    names_.push_back(name);
+    return (staging_ / name).string();
+  }
+  void publish()
+  {
+    for (const auto& name : names_)
+      fs::rename(staging_ / name, dir_ / name);
+  }
+
+private:
+  fs::path dir_, staging_;
+  std::vector<std::string> names_;
+};
+
+std::string formatFloat(float v)
+{
+  if (!std::isfinite(v))
+    return "nan";
+  std::ostringstream out;
+  out << std::setprecision(6) << v;
+  return out.str();
+}
+
 int run(const Options& options)
 {
   const openable::Config config = loadConfig(options);
-  const openable::FrameDescriber describer(config);
-  std::error_code ec;
-  fs::create_directories(options.output, ec);
-  if (!fs::is_directory(options.output))
-    throw Error("cannot create output folder '" + options.output + "'");
-  {
-    // Fail now, not after minutes of work, when the folder cannot be written.
-    const std::string probe = (fs::path(options.output) / ".openable_write_test").string();
-    openable::writeFileAtomically(probe, "");
-    fs::remove(probe, ec);
-  }
-
+  StagedOutput output(options.output);  // fails now, not after minutes of work, when DIR cannot be written
   const bool localisation = !options.query.empty();
   Timings timings;
-  TraversalReader reference(options.reference, options.reference_right, describer, config);
-  std::unique_ptr<openable::LoopDetector> detector;
-  std::vector<long> reference_file_of;  // database position -> file index
-  openable::FrameDescriptor descriptor;
-  std::string name;
-  bool described = false;
 
+  // Localisation: describe the reference traversal into a map first.
+  std::unique_ptr<openable::OnlineDetector> detector;
+  std::vector<long> reference_file_of;  // database position -> file index of the reference
+  long reference_files = 0;
   if (localisation)
   {
-    openable::PlaceDatabase map(describer.layout(), 0, config.toYaml());
-    for (long file = 0; reference.next(descriptor, name, described, timings); ++file)
-      if (described)
-      {
-        openable::FrameInfo info;
-        info.source = name;
-        map.add(descriptor, info);
-        reference_file_of.push_back(file);
-      }
+    const openable::OnlineDetector describer(config);
+    openable::PlaceDatabase map(describer.describer().layout(), 0, config.toYaml());
+    TraversalReader reference(options.reference, options.reference_right);
+    openable::FrameInput input;
+    for (; reference.next(input, timings); ++reference_files)
+    {
+      const auto start = Clock::now();
+      tryFrame(input.source,
+               [&]
+               {
+                 openable::FrameInfo info;
+                 info.source = input.source;
+                 map.add(describer.describe(input), info);
+                 reference_file_of.push_back(reference_files);
+               });
+      timings.describe += msSince(start);
+    }
     if (map.empty())
       throw Error("no reference frame could be described in '" + options.reference + "'");
     timings.frames += map.size();
-    detector = std::make_unique<openable::LoopDetector>(config, std::move(map));
+    detector = std::make_unique<openable::OnlineDetector>(config, std::move(map));
   }
   else
-  {
-    detector = std::make_unique<openable::LoopDetector>(config);
-  }
+    detector = std::make_unique<openable::OnlineDetector>(config);
 
-  TraversalReader* stream = &reference;
-  std::unique_ptr<TraversalReader> query;
-  if (localisation)
-  {
-    query = std::make_unique<TraversalReader>(options.query, options.query_right, describer, config);
-    stream = query.get();
-  }
-  const size_t columns = reference.size();
-  const size_t rows = stream->size();
-  cv::Mat matrix(static_cast<int>(rows), static_cast<int>(columns), CV_32F, cv::Scalar(std::nanf("")));
-
-  std::ostringstream csv;
+  // The stream: every frame through the online pipeline, as a nodelet would see it.
+  TraversalReader stream(localisation ? options.query : options.reference,
+                         localisation ? options.query_right : options.reference_right);
+  std::vector<std::vector<float>> rows;  // per stream file: distances by reference file (empty = not described)
+  std::vector<long> stream_file_of;      // loop-closure mode: database position -> file index
   const bool panoramic = config.camera_type == "panoramic";
-  csv << "query,match,distance" << (panoramic ? ",direction,shift" : "") << "\n";
-  size_t matches = 0, truth_checked = 0, truth_hits = 0, matches_correct = 0;
-  // With a threshold or a uniqueness bound, only accepted loop closures are listed; with neither, every
-  // frame's best match.
-  const bool gated = config.threshold >= 0 || config.min_uniqueness > 0;
+  std::ostringstream loops, decisions;
+  loops << "query,match,distance,score,status" << (panoramic ? ",direction,shift" : "") << "\n";
+  decisions << "query,match,distance,score,status,accepted\n";
+  std::map<std::string, size_t> status_counts;
+  size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;
   std::vector<float> row;
-  std::vector<long> stream_file_of;  // loop-closure mode: database position -> file index
-  for (long file = 0; stream->next(descriptor, name, described, timings); ++file)
+  openable::FrameInput input;
+  for (long file = 0; stream.next(input, timings); ++file)
   {
-    if (!described || file >= matrix.rows)
+    rows.emplace_back();
+    openable::FrameOutcome outcome;
+    if (!tryFrame(input.source, [&] { outcome = detector->process(input); }))
       continue;
+    timings.preprocess += outcome.times.preprocess_ms;
+    timings.describe += outcome.times.describe_ms;
+    timings.match += outcome.times.match_ms + outcome.times.verify_ms;
     ++timings.frames;
-    const auto start = Clock::now();
-    openable::FrameInfo info;
-    info.source = name;
-    const openable::Detection d = detector->process(descriptor, info);
-    detector->lastRow(row);
-    timings.match += msSince(start);
-    if (!localisation)
+    if (!localisation && outcome.stored)
       stream_file_of.push_back(file);
     const std::vector<long>& file_of = localisation ? reference_file_of : stream_file_of;
-    float* out = matrix.ptr<float>(static_cast<int>(file));
+    detector->loopDetector().lastRow(row);
+    rows.back().assign(static_cast<size_t>(localisation ? reference_files : file + 1), std::nanf(""));
     for (size_t p = 0; p < row.size() && p < file_of.size(); ++p)
-      out[file_of[p]] = row[p];
-    if (!d.has_candidates)
-      continue;
-    const long match = file_of[d.best.position];
-    if (options.ground_truth_tolerance >= 0)
+      rows.back()[static_cast<size_t>(file_of[p])] = row[p];
+
+    ++status_counts[openable::toString(outcome.status)];
+    const openable::Detection& d = outcome.detection;
+    const long match = d.has_candidates ? file_of[d.best.position] : -1;
+    decisions << file << "," << match << "," << formatFloat(d.has_candidates ? d.best.distance : NAN) << ","
+              << formatFloat(d.has_candidates ? outcome.score : NAN) << "," << openable::toString(outcome.status)
+              << "," << (outcome.published() ? 1 : 0) << "\n";
+    if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;
       truth_hits += std::labs(match - file) <= options.ground_truth_tolerance ? 1 : 0;
     }
-    if (gated && !d.accepted)
+    if (!outcome.published())
       continue;
-    ++matches;
-    matches_correct += std::labs(match - file) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
-    csv << file << "," << match << "," << std::setprecision(6) << d.best.distance;
+    ++published;
+    published_correct += std::labs(match - file) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
+    loops << file << "," << match << "," << formatFloat(d.best.distance) << "," << formatFloat(outcome.score)
+          << ",published";
     if (panoramic)
-      csv << "," << int(d.best.direction) << "," << d.best.shift;
-    csv << "\n";
+      loops << "," << int(d.best.direction) << "," << d.best.shift;
+    loops << "\n";
   }
+  if (timings.frames == 0)
+    throw Error("no frame of '" + (localisation ? options.query : options.reference) + "' could be described");
 
-  const fs::path out_dir(options.output);
-  openable::writeNpy((out_dir / "distance_matrix.npy").string(), matrix);
-  writePng((out_dir / "distance_matrix.png").string(),
+  // Frames are counted as decoded: the matrix is as wide as the reference really was.
+  const long columns = localisation ? reference_files : static_cast<long>(rows.size());
+  cv::Mat matrix(static_cast<int>(rows.size()), static_cast<int>(columns), CV_32F, cv::Scalar(std::nanf("")));
+  for (size_t r = 0; r < rows.size(); ++r)
+    std::copy(rows[r].begin(), rows[r].end(), matrix.ptr<float>(static_cast<int>(r)));
+
+  openable::writeNpy(output.path("distance_matrix.npy"), matrix);
+  writePng(output.path("distance_matrix.png"),
            openable::colorize(config.display_normalization == "max" ? openable::normalizeByMax(matrix)
                                                                     : openable::normalizeMinMax(matrix),
                               config.color_map));
   if (config.threshold >= 0)
-    writePng((out_dir / "distance_matrix_thresholded.png").string(), openable::thresholdView(matrix, config.threshold));
-  openable::writeFileAtomically((out_dir / "loop_closures.csv").string(), csv.str());
+    writePng(output.path("distance_matrix_thresholded.png"), openable::thresholdView(matrix, config.threshold));
+  openable::writeFileAtomically(output.path("loop_closures.csv"), loops.str());
+  openable::writeFileAtomically(output.path("decisions.csv"), decisions.str());
 
   std::ostringstream json;
   json << "{\n"
@@ -336,30 +366,34 @@ int run(const Options& options)
        << jsonStage("describe", timings.describe, timings.frames) << ",\n"
        << jsonStage("match", timings.match, timings.frames) << ",\n"
        << "  \"frames\": " << timings.frames << ",\n"
-       << "  \"database_bytes\": " << detector->database().bytes() << "\n}\n";
-  openable::writeFileAtomically((out_dir / "timings.json").string(), json.str());
+       << "  \"database_bytes\": " << detector->loopDetector().database().bytes() << "\n}\n";
+  openable::writeFileAtomically(output.path("timings.json"), json.str());
+  output.publish();
 
-  const double per_frame =
-      timings.frames ? (timings.preprocess + timings.describe + timings.match) / timings.frames : 0;
   std::cout << "mode: " << (localisation ? "localisation (query vs reference)" : "loop closure (stream vs its past)")
             << "\n"
-            << "frames: " << rows << " x " << columns << " (described " << timings.frames << ")\n"
-            << "matches: " << matches
-            << (gated ? " accepted (threshold " + config.get("threshold") + ", min_uniqueness " +
-                            config.get("min_uniqueness") + ")"
-                      : " (no threshold or uniqueness bound: every frame's best match)")
-            << "\n";
+            << "frames: " << rows.size() << " x " << columns << " (described " << timings.frames << ")\n"
+            << "published: " << published << " loop closures (";
+  bool first = true;
+  for (const auto& [status, count] : status_counts)
+  {
+    std::cout << (first ? "" : ", ") << status << " " << count;
+    first = false;
+  }
+  std::cout << ")\n";
   if (truth_checked)
     std::cout << "best match within " << options.ground_truth_tolerance << " frames of the truth: " << std::fixed
               << std::setprecision(3) << double(truth_hits) / truth_checked << " (" << truth_hits << " of "
               << truth_checked << ")\n"
-              << "listed matches within " << options.ground_truth_tolerance
-              << " frames of the truth: " << matches_correct << " of " << matches << "\n";
+              << "published loop closures within " << options.ground_truth_tolerance
+              << " frames of the truth: " << published_correct << " of " << published << "\n";
+  const double per_frame = (timings.preprocess + timings.describe + timings.match) / timings.frames;
   std::cout << std::fixed << std::setprecision(3) << "time per frame: " << per_frame
-            << " ms (preprocess + describe + match, image decoding excluded: "
-            << timings.read / std::max<size_t>(1, timings.frames) << " ms)\n"
+            << " ms (preprocess + describe + match + decide; decoding the image took " << timings.read / timings.frames
+            << " ms more)\n"
             << "wrote: " << options.output << "/{distance_matrix.npy,distance_matrix.png,"
-            << (config.threshold >= 0 ? "distance_matrix_thresholded.png," : "") << "loop_closures.csv,timings.json}\n";
+            << (config.threshold >= 0 ? "distance_matrix_thresholded.png," : "")
+            << "loop_closures.csv,decisions.csv,timings.json}\n";
   return 0;
 }
 }  // namespace

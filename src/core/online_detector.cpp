@@ -1,0 +1,251 @@
+#include "openable/online_detector.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "openable/error.h"
+#include "openable/stereo.h"
+
+namespace openable
+{
+namespace
+{
+void checkOptions(const OnlineOptions& options)
+{
+  if (!std::isfinite(options.keyframe_distance) || options.keyframe_distance < 0.0)
+    throw Error("keyframe_distance: value " + std::to_string(options.keyframe_distance) +
+                " is not allowed; expected metres >= 0 (0 = every frame)");
+  if (!std::isfinite(options.keyframe_angle) || options.keyframe_angle < 0.0)
+    throw Error("keyframe_angle: value " + std::to_string(options.keyframe_angle) +
+                " is not allowed; expected radians >= 0 (0 = off)");
+  const auto errors = options.verifier.validate();
+  if (!errors.empty())
+    throw Error("verification parameters: " + errors.front());
+}
+
+double millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+PlaceDatabase nonEmpty(PlaceDatabase map)
+{
+  if (map.empty())
+    throw Error("the reference map holds no frame; expected a map with at least one place");
+  return map;
+}
+
+/// Angle (radians) between two orientations given as quaternions (x y z w at indices 3..6).
+double rotationBetween(const std::array<double, 7>& a, const std::array<double, 7>& b)
+{
+  double dot = 0.0, na = 0.0, nb = 0.0;
+  for (int i = 3; i < 7; ++i)
+  {
+    dot += a[i] * b[i];
+    na += a[i] * a[i];
+    nb += b[i] * b[i];
+  }
+  if (na <= 0.0 || nb <= 0.0)
+    return 0.0;
+  const double c = std::min(1.0, std::fabs(dot) / std::sqrt(na * nb));
+  return 2.0 * std::acos(c);
+}
+}  // namespace
+
+OnlineDetector::OnlineDetector(const Config& config, const OnlineOptions& options)
+  : config_(config),
+    options_(options),
+    describer_(config),
+    detector_(config),
+    decision_(config),
+    features_(options.feature_bytes)
+{
+  checkOptions(options);
+}
+
+OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options)
+  : config_(config),
+    options_(options),
+    describer_(config),
+    detector_(config, nonEmpty(std::move(reference_map))),
+    decision_(config),
+    features_(options.feature_bytes)
+{
+  checkOptions(options);
+}
+
+std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
+{
+  const Preprocessor& pre = describer_.preprocessor();
+  if (config_.camera_type == "panoramic" && !input.cameras.empty())
+    return pre.patchesFromCameras(input.cameras);
+  if (input.image.empty())
+    throw Error("empty image; expected an 8-bit grey, BGR or BGRA image");
+  if (config_.descriptor != "D-LDB")
+    return pre.patches(input.image);  // stereo with a mono descriptor: the left image only, no SGBM cost
+  if (!input.disparity.empty())
+    return pre.patchesWithDisparity(input.image, disparityFromImage(input.disparity));
+  if (input.right.empty())
+    throw Error("descriptor D-LDB needs the right image or a disparity image besides the left one");
+  return pre.patchesWithDisparity(input.image, disparityFromPair(input.image, input.right, config_));
+}
+
+FrameDescriptor OnlineDetector::describe(const FrameInput& input) const
+{
+  return describer_.describe(patches(input));
+}
+
+bool OnlineDetector::isKeyframe(const FrameInput& input)
+{
+  if (options_.keyframe_distance <= 0.0 && options_.keyframe_angle <= 0.0)
+    return true;
+  // Without a pose the motion is unknown: keeping the frame loses nothing, skipping it could.
+  if (!input.has_pose)
+    return true;
+  if (!has_keyframe_pose_)
+  {
+    has_keyframe_pose_ = true;
+    keyframe_pose_ = input.pose;
+    return true;
+  }
+  const double dx = input.pose[0] - keyframe_pose_[0];
+  const double dy = input.pose[1] - keyframe_pose_[1];
+  const double dz = input.pose[2] - keyframe_pose_[2];
+  const bool moved =
+      (options_.keyframe_distance > 0.0 && std::sqrt(dx * dx + dy * dy + dz * dz) >= options_.keyframe_distance) ||
+      (options_.keyframe_angle > 0.0 && rotationBetween(keyframe_pose_, input.pose) >= options_.keyframe_angle);
+  if (moved)
+    keyframe_pose_ = input.pose;
+  return moved;
+}
+
+FrameOutcome OnlineDetector::process(const FrameInput& input)
+{
+  FrameOutcome outcome;
+  outcome.query.stamp = input.stamp;
+  outcome.query.session = input.session;
+  outcome.query.source = input.source;
+  outcome.query.has_pose = input.has_pose;
+  outcome.query.pose = input.pose;
+  if (input.stamp > 0.0 && last_stamp_ > 0.0 && input.stamp < last_stamp_)
+  {
+    outcome.status = FrameStatus::TimeJump;
+    return outcome;
+  }
+  if (!isKeyframe(input))
+  {
+    outcome.status = FrameStatus::NotKeyframe;
+    return outcome;
+  }
+  // Bad input throws here, before anything is stored.
+  auto start = std::chrono::steady_clock::now();
+  const std::vector<Patch> cells = patches(input);
+  outcome.times.preprocess_ms = millisecondsSince(start);
+  start = std::chrono::steady_clock::now();
+  const FrameDescriptor descriptor = describer_.describe(cells);
+  outcome.times.describe_ms = millisecondsSince(start);
+  if (input.stamp > 0.0)
+    last_stamp_ = input.stamp;
+
+  start = std::chrono::steady_clock::now();
+  outcome.detection = detector_.process(descriptor, outcome.query);
+  outcome.stored = true;
+  outcome.query.id = outcome.detection.query_id;
+  outcome.status = decision_.decide(outcome.detection);
+  outcome.score = LoopDecision::score(outcome.detection);
+  if (outcome.detection.has_candidates)
+  {
+    const PlaceDatabase& database = detector_.database();
+    const uint64_t id = outcome.detection.best.id;
+    // Looked up by id: storing the query may have evicted the oldest frames.
+    if (id >= database.firstId() && id - database.firstId() < database.size())
+    {
+      outcome.has_match_info = true;
+      outcome.match = database.info(static_cast<size_t>(id - database.firstId()));
+    }
+  }
+  outcome.times.match_ms = millisecondsSince(start);
+  start = std::chrono::steady_clock::now();
+  verify(input, outcome);
+  outcome.times.verify_ms = millisecondsSince(start);
+  return outcome;
+}
+
+void OnlineDetector::verify(const FrameInput& input, FrameOutcome& outcome)
+{
+  if (!options_.verify)
+    return;
+  // Every stored frame keeps its features: later frames may close a loop with it.
+  std::unique_ptr<FrameFeatures> query;
+  if (verifier_ && !input.image.empty())
+  {
+    try
+    {
+      const cv::Mat right = verifier_->camera().stereo() ? input.right : cv::Mat();
+      query = std::make_unique<FrameFeatures>(verifier_->extract(input.image, right, outcome.query.id));
+    }
+    catch (const Error& e)
+    {
+      outcome.verification_note = std::string("no features: ") + e.what();
+    }
+    catch (const cv::Exception& e)
+    {
+      outcome.verification_note = std::string("no features (OpenCV): ") + e.what();
+    }
+  }
+  if (outcome.published())
+  {
+    const FrameFeatures* match = features_.find(outcome.detection.best.id);
+    if (!verifier_)
+      outcome.verification_note = "no camera yet";
+    else if (!query)
+      outcome.verification_note = outcome.verification_note.empty() ? "no query features" : outcome.verification_note;
+    else if (!match)
+      outcome.verification_note = "match frame has no features (it came before the camera, or was evicted)";
+    else
+    {
+      outcome.verification = verifier_->verify(*match, *query);
+      outcome.verified = outcome.verification.accepted();
+      outcome.verification_note = outcome.verified ? "" : std::string(toString(outcome.verification.status)) +
+                                                              (outcome.verification.reason.empty() ? "" : " (" +
+                                                                   outcome.verification.reason + ")");
+      if (!outcome.verified)
+        outcome.status = FrameStatus::FailedVerification;
+    }
+    // A required verification never lets an unverified candidate through.
+    if (!outcome.verified && outcome.published() && options_.verify_required)
+      outcome.status = FrameStatus::Unverified;
+  }
+  if (query && !detector_.localisationMode())
+    features_.insert(std::move(*query));
+}
+
+bool OnlineDetector::setCamera(const PinholeCamera& camera)
+{
+  if (verifier_)
+  {
+    const PinholeCamera& c = verifier_->camera();
+    return c.fx == camera.fx && c.fy == camera.fy && c.cx == camera.cx && c.cy == camera.cy &&
+           c.baseline == camera.baseline;
+  }
+  verifier_ = std::make_unique<GeometricVerifier>(camera, options_.verifier);
+  return true;
+}
+
+void OnlineDetector::updateConfig(const Config& config)
+{
+  detector_.updateMatching(config);  // validates and refuses descriptor keys
+  decision_.setConfig(config);
+  config_ = config;
+}
+
+void OnlineDetector::reset()
+{
+  detector_.reset();
+  decision_.reset();
+  features_.clear();
+  last_stamp_ = 0.0;
+  has_keyframe_pose_ = false;
+}
+
+}  // namespace openable
