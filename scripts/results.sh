@@ -48,7 +48,7 @@ import hashlib, json, os, subprocess, sys
 
 OFFLINE, EVALUATE, DATA, OUT, ROOT = (os.environ[k] for k in ('OFFLINE', 'EVALUATE', 'DATA', 'OUT', 'ROOT'))
 PLOTS, ONLY = os.environ['PLOTS'] == '1', os.environ['ONLY']
-DEFAULT = ROOT + '/config/default.yaml'
+DEFAULT = ROOT + '/config/paper.yaml'  # the paper's defaults: the baseline of every table
 GP, NL = DATA + '/gardens_point', DATA + '/nordland'
 # name: (reference, query, tolerance T)
 PAIRS = {

@@ -37,7 +37,7 @@ const char* toString(FrameStatus status);
 /// and a single candidate was even called unique). So a frame must have min_candidates places to choose
 /// from, pass every gate that is set, and agree with the consistent_frames - 1 frames before it: their
 /// best matches advance together, one place per frame within consistency_tolerance (a revisit at about
-/// the same speed, as sequence matching assumes anyway).
+/// the same speed, as sequence matching assumes anyway), step by step and over the whole run.
 class LoopDecision
 {
 public:
@@ -56,12 +56,12 @@ public:
 
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
-  bool advancesWithPrevious(const Detection& detection) const;
+  bool advancesWithRun(const Detection& detection) const;
 
   Config config_;
-  int run_ = 0;                  ///< consecutive frames (ending at the previous one) that passed the gates
-  bool has_previous_ = false;    ///< the previous frame passed the gates
-  uint64_t previous_match_ = 0;  ///< its best match
+  int run_ = 0;                   ///< consecutive frames (ending at the previous one) that passed and agree
+  uint64_t run_start_match_ = 0;  ///< best match of the run's first frame
+  uint64_t previous_match_ = 0;   ///< best match of the previous frame
   int previous_direction_ = 1;
 };
 

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "openable/geometric_verifier.h"
-#include "openable/loop_detector.h"
+#include "openable/online_detector.h"
 #include "openable/place_database.h"
 #include "openable_ros/LoopClosure.h"
 
@@ -35,9 +35,9 @@ openable::PinholeCamera toPinholeCamera(const sensor_msgs::CameraInfo& left,
 
 geometry_msgs::Pose toPoseMsg(const std::array<double, 7>& pose);
 
-/// One accepted loop closure as a message: header of the query image, ids, stamps, sessions, distance,
-/// uniqueness, direction, shift and the poses of both frames when both are known.
-LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::Detection& detection,
-                               const openable::FrameInfo& query, const openable::FrameInfo* match);
+/// One frame's outcome as a message: header of the query image, status and score, ids, stamps, sessions,
+/// distance, uniqueness, direction, shift, the poses of both frames when both are known, and the verified
+/// relative pose when verification accepted the loop.
+LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::FrameOutcome& outcome);
 
 }  // namespace openable_ros

@@ -22,9 +22,8 @@
 
 #include "openable/config.h"
 #include "openable/distance_matrix_view.h"
-#include "openable/frame_describer.h"
 #include "openable/geometric_verifier.h"
-#include "openable/loop_detector.h"
+#include "openable/online_detector.h"
 #include "openable_ros/DetectorConfig.h"
 #include "openable_ros/LoadMap.h"
 #include "openable_ros/LoopClosure.h"
@@ -32,7 +31,8 @@
 
 namespace openable_ros
 {
-/// What the three detector nodelets share: the core LoopDetector and FrameDescriber, the outputs
+/// What the three detector nodelets share: the core OnlineDetector (the same pipeline openable_offline
+/// runs), the outputs
 /// (loop_closures, distance_matrix, loop_markers, diagnostics), the services (~save_map, ~load_map,
 /// ~reset), dynamic_reconfigure, tf poses and keyframing. A derived nodelet only subscribes to its inputs
 /// and, per synchronised input set, turns the messages into a descriptor through processFrame().
@@ -53,22 +53,11 @@ protected:
   /// but idle (never throws: that would take the whole manager down).
   bool setupDetector(const openable::Config& defaults);
 
-  /// Turns the preprocessed input into a descriptor; throws openable::Error / cv::Exception on bad input.
-  using DescribeFunction = std::function<openable::FrameDescriptor(const openable::FrameDescriber&)>;
-
-  /// The rectified images geometric verification (~verify) extracts features from: left (or mono) and,
-  /// for a stereo camera, right. Empty images: the frame has no features (its loops are not verified).
-  struct VerifyImages
-  {
-    cv::Mat left;
-    cv::Mat right;
-  };
-
-  /// One synchronised input set: checks the stamp (time jumps), decides whether it is a keyframe (tf),
-  /// describes it (timed), matches it, publishes loop closures, updates the distance matrix and markers.
-  /// `topic` names the input in warnings and in the stored frame's source. Never throws.
-  void processFrame(const std_msgs::Header& header, const std::string& topic, const DescribeFunction& describe,
-                    const VerifyImages& verify_images = VerifyImages());
+  /// One synchronised input set (images converted by the nodelet; stamp, session, source and pose are
+  /// filled here): checks the stamp (time jumps), looks up the pose (tf), runs it through the core
+  /// OnlineDetector (keyframe, describe, match, decide, verify), publishes the loop closure and the frame's
+  /// decision, updates the distance matrix and markers. `topic` names the input in warnings. Never throws.
+  void processFrame(const std_msgs::Header& header, const std::string& topic, openable::FrameInput input);
 
   /// With ~verify: builds the geometric verifier from the first valid camera (from camera_info). Later
   /// calls with the same camera do nothing; another camera is refused with a warning.
@@ -76,7 +65,7 @@ protected:
   /// True when ~verify is on (the nodelet then subscribes camera_info and passes VerifyImages).
   bool verifyEnabled() const
   {
-    return verify_;
+    return options_.verify;
   }
 
   /// Counts a rejected input under `reason` (shown in diagnostics) and warns, throttled per reason.
@@ -127,16 +116,11 @@ private:
     }
   };
 
-  /// Geometric verification of an accepted loop: fills the relative pose, or returns false when the
-  /// loop must not be published (verification failed and ~verify_required).
-  bool verifyLoopLocked(const openable::Detection& detection, const openable::FrameFeatures* query, LoopClosure& msg);
   bool loadMapLocked(const std::string& path, std::string& message);
   bool checkTimeLocked(const std_msgs::Header& header, const std::string& topic);
   /// Camera pose in ~fixed_frame at the header's stamp; false (with a throttled warning) without tf.
   bool lookupPoseLocked(const std_msgs::Header& header, std::array<double, 7>& pose);
-  bool isKeyframeLocked(bool has_pose, const std::array<double, 7>& pose);
-  void publishLoopLocked(const std_msgs::Header& header, const openable::Detection& detection,
-                         const openable::FrameInfo& query, const openable::FrameFeatures* features);
+  void publishOutcomeLocked(const std_msgs::Header& header, const openable::FrameOutcome& outcome);
   void publishMatrixLocked(const std_msgs::Header& header);
   void publishMarkersLocked(const std_msgs::Header& header, bool force);
   void resetStreamLocked();
@@ -151,16 +135,14 @@ private:
   std::mutex mutex_;
   bool ready_ = false;
   openable::Config config_;
-  std::unique_ptr<openable::FrameDescriber> describer_;
-  std::unique_ptr<openable::LoopDetector> detector_;
+  openable::OnlineOptions options_;
+  std::unique_ptr<openable::OnlineDetector> detector_;
   openable::DistanceMatrixView view_;
 
   // ROS-only parameters.
   std::string fixed_frame_;
   std::string map_file_;
   double tf_timeout_ = 0.05;
-  double keyframe_distance_ = 0.0;
-  double keyframe_angle_ = 0.0;
   bool reset_on_time_jump_ = false;
   double matrix_rate_ = 2.0;
   bool matrix_threshold_view_ = false;
@@ -168,16 +150,11 @@ private:
   int queue_size_ = 10;
   double sync_warning_timeout_ = 5.0;
   uint32_t session_ = 0;
-  bool verify_ = false;
-  bool verify_required_ = true;
-
-  // Geometric verification (~verify).
-  std::unique_ptr<openable::GeometricVerifier> verifier_;
-  openable::FeatureStore features_;
-  std::map<std::string, uint64_t> verification_results_;
+  std::map<std::string, uint64_t> statuses_;  ///< frames per decision status (diagnostics)
 
   // Outputs and services.
   ros::Publisher loop_pub_;
+  ros::Publisher decisions_pub_;
   ros::Publisher markers_pub_;
   std::unique_ptr<image_transport::ImageTransport> image_transport_;
   image_transport::Publisher matrix_pub_;
@@ -195,8 +172,6 @@ private:
   ros::Time last_stamp_;
   ros::WallTime last_matrix_time_;
   ros::WallTime last_markers_time_;
-  bool has_keyframe_pose_ = false;
-  std::array<double, 7> keyframe_pose_{{0, 0, 0, 0, 0, 0, 1}};
   std::vector<float> row_;
   std::deque<geometry_msgs::Point> trajectory_;
   std::deque<std::pair<geometry_msgs::Point, geometry_msgs::Point>> loop_edges_;

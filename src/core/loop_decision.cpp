@@ -43,7 +43,6 @@ void LoopDecision::setConfig(const Config& config)
 void LoopDecision::reset()
 {
   run_ = 0;
-  has_previous_ = false;
 }
 
 float LoopDecision::score(const Detection& detection)
@@ -68,13 +67,17 @@ bool LoopDecision::gatesPass(const Detection& detection, FrameStatus& why) const
   return true;
 }
 
-bool LoopDecision::advancesWithPrevious(const Detection& detection) const
+bool LoopDecision::advancesWithRun(const Detection& detection) const
 {
-  if (!has_previous_ || detection.best.direction != previous_direction_)
+  if (run_ == 0 || detection.best.direction != previous_direction_)
     return false;
-  // Same direction: the match moves one place forward per frame; reverse: one place back.
-  const long step = static_cast<long>(detection.best.id) - static_cast<long>(previous_match_);
-  return std::labs(step - detection.best.direction) <= config_.consistency_tolerance;
+  // Same direction: the match moves one place forward per frame; reverse: one place back. Checked per
+  // step and over the whole run, so a match that stays put (a "hub" place every frame matches) never
+  // becomes consistent by small steps.
+  const auto offset = [&detection](uint64_t from, long frames)
+  { return std::labs(static_cast<long>(detection.best.id) - static_cast<long>(from) - detection.best.direction * frames); };
+  return offset(previous_match_, 1) <= config_.consistency_tolerance &&
+         offset(run_start_match_, run_) <= config_.consistency_tolerance;
 }
 
 FrameStatus LoopDecision::decide(const Detection& detection)
@@ -89,8 +92,13 @@ FrameStatus LoopDecision::decide(const Detection& detection)
   }
   else
   {
-    run_ = advancesWithPrevious(detection) ? run_ + 1 : 1;
-    has_previous_ = true;
+    if (advancesWithRun(detection))
+      ++run_;
+    else
+    {
+      run_ = 1;
+      run_start_match_ = detection.best.id;
+    }
     previous_match_ = detection.best.id;
     previous_direction_ = detection.best.direction;
     return run_ >= config_.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;

@@ -42,10 +42,9 @@ private:
       rejectFrame("bad image", "'" + image_sub_.getTopic() + "': " + error);
       return;
     }
-    processFrame(
-        msg->header, image_sub_.getTopic(),
-        [&image](const openable::FrameDescriber& describer) { return describer.describeImage(image); },
-        VerifyImages{image, cv::Mat()});
+    openable::FrameInput input;
+    input.image = image;
+    processFrame(msg->header, image_sub_.getTopic(), std::move(input));
   }
 
   std::unique_ptr<image_transport::ImageTransport> input_transport_;

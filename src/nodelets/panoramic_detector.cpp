@@ -76,8 +76,9 @@ private:
       rejectFrame("bad image", "'" + subscribers_[0].getTopic() + "': " + error);
       return;
     }
-    processFrame(msg->header, subscribers_[0].getTopic(),
-                 [&image](const openable::FrameDescriber& describer) { return describer.describeImage(image); });
+    openable::FrameInput input;
+    input.image = image;
+    processFrame(msg->header, subscribers_[0].getTopic(), std::move(input));
   }
 
   void cameraCallback(size_t index, const sensor_msgs::ImageConstPtr& msg)
@@ -100,9 +101,9 @@ private:
       }
     }
     // The ring is stamped by its first camera.
-    processFrame(set[0]->header, subscribers_[0].getTopic(),
-                 [&images](const openable::FrameDescriber& describer)
-                 { return describer.describe(describer.preprocessor().patchesFromCameras(images)); });
+    openable::FrameInput input;
+    input.cameras = std::move(images);
+    processFrame(set[0]->header, subscribers_[0].getTopic(), std::move(input));
   }
 
   std::vector<std::string> cameras_;

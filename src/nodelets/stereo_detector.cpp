@@ -173,20 +173,12 @@ private:
     {
       return;
     }
-    const bool needs_disparity = config().descriptor == "D-LDB";
-    processFrame(
-        left_msg->header, left_sub_.getTopic(),
-        [&left, &right, needs_disparity, this](const openable::FrameDescriber& describer)
-        {
-          if (!needs_disparity)
-          {
-            // A mono descriptor on the left image: no SGBM cost.
-            return describer.describeImage(left);
-          }
-          const cv::Mat disparity = openable::disparityFromPair(left, right, config());
-          return describer.describe(describer.preprocessor().patchesWithDisparity(left, disparity));
-        },
-        VerifyImages{left, right});
+    // The core describes (D-LDB computes the disparity with SGBM; a mono descriptor uses the left image) and
+    // verifies with the pair.
+    openable::FrameInput input;
+    input.image = left;
+    input.right = right;
+    processFrame(left_msg->header, left_sub_.getTopic(), std::move(input));
   }
 
   void disparityCallback(const sensor_msgs::ImageConstPtr& left_msg,
@@ -218,13 +210,10 @@ private:
     {
       return;
     }
-    processFrame(
-        left_msg->header, left_sub_.getTopic(),
-        [&left, &raw](const openable::FrameDescriber& describer) {
-          return describer.describe(
-              describer.preprocessor().patchesWithDisparity(left, openable::disparityFromImage(raw)));
-        },
-        VerifyImages{left, cv::Mat()});
+    openable::FrameInput input;
+    input.image = left;
+    input.disparity = raw;
+    processFrame(left_msg->header, left_sub_.getTopic(), std::move(input));
   }
 
   bool use_disparity_ = false;

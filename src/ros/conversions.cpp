@@ -3,6 +3,9 @@
 #include <cv_bridge/cv_bridge.h>
 #include <sensor_msgs/image_encodings.h>
 
+#include <tf2/LinearMath/Matrix3x3.h>
+#include <tf2/LinearMath/Quaternion.h>
+
 #include <boost/make_shared.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -121,37 +124,58 @@ geometry_msgs::Pose toPoseMsg(const std::array<double, 7>& pose)
   return out;
 }
 
-LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::Detection& detection,
-                               const openable::FrameInfo& query, const openable::FrameInfo* match)
+LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::FrameOutcome& outcome)
 {
+  const openable::Detection& detection = outcome.detection;
+  const openable::FrameInfo* match = outcome.has_match_info ? &outcome.match : nullptr;
   auto msg = boost::make_shared<LoopClosure>();
   msg->header = header;
-  msg->query_id = uint32_t(detection.query_id);
+  msg->status = openable::toString(outcome.status);
+  msg->score = outcome.score;
+  msg->query_id = uint32_t(outcome.query.id);
   msg->match_id = uint32_t(detection.best.id);
   if (match)
   {
     msg->match_stamp = ros::Time(std::max(0.0, match->stamp));
     msg->match_session = match->session;
   }
-  msg->query_session = query.session;
+  msg->query_session = outcome.query.session;
   msg->distance = detection.best.distance;
   msg->uniqueness = detection.uniqueness;
   msg->sequence_length = detection.best.sequence_length;
   msg->direction = detection.best.direction;
   msg->shift = detection.best.shift;
-  msg->has_poses = match && query.has_pose && match->has_pose;
+  msg->has_poses = match && outcome.query.has_pose && match->has_pose;
+  msg->query_pose.orientation.w = 1.0;
+  msg->match_pose.orientation.w = 1.0;
   if (msg->has_poses)
   {
-    msg->query_pose = toPoseMsg(query.pose);
+    msg->query_pose = toPoseMsg(outcome.query.pose);
     msg->match_pose = toPoseMsg(match->pose);
   }
-  else
-  {
-    msg->query_pose.orientation.w = 1.0;
-    msg->match_pose.orientation.w = 1.0;
-  }
-  msg->has_relative_pose = false;
+  msg->has_relative_pose = outcome.verified;
   msg->relative_pose.pose.orientation.w = 1.0;
+  if (outcome.verified)
+  {
+    const openable::Verification& v = outcome.verification;
+    msg->relative_pose.pose.position.x = v.translation[0];
+    msg->relative_pose.pose.position.y = v.translation[1];
+    msg->relative_pose.pose.position.z = v.translation[2];
+    const cv::Matx33d& r = v.rotation;
+    tf2::Quaternion q;
+    tf2::Matrix3x3(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)).getRotation(q);
+    msg->relative_pose.pose.orientation.x = q.x();
+    msg->relative_pose.pose.orientation.y = q.y();
+    msg->relative_pose.pose.orientation.z = q.z();
+    msg->relative_pose.pose.orientation.w = q.w();
+    for (int row = 0; row < 6; ++row)
+    {
+      for (int col = 0; col < 6; ++col)
+      {
+        msg->relative_pose.covariance[size_t(row * 6 + col)] = v.covariance(row, col);
+      }
+    }
+  }
   return msg;
 }
 

@@ -88,8 +88,8 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   fixed_frame_ = readString(pnh, "fixed_frame", "", warnings);
   map_file_ = readString(pnh, "map_file", "", warnings);
   tf_timeout_ = readDouble(pnh, "tf_timeout", 0.05, 0.0, 10.0, "s", warnings);
-  keyframe_distance_ = readDouble(pnh, "keyframe_distance", 0.0, 0.0, 1e6, "m", warnings);
-  keyframe_angle_ = readDouble(pnh, "keyframe_angle", 0.0, 0.0, M_PI, "rad", warnings);
+  options_.keyframe_distance = readDouble(pnh, "keyframe_distance", 0.0, 0.0, 1e6, "m", warnings);
+  options_.keyframe_angle = readDouble(pnh, "keyframe_angle", 0.0, 0.0, M_PI, "rad", warnings);
   reset_on_time_jump_ = readBool(pnh, "reset_on_time_jump", false, warnings);
   matrix_rate_ = readDouble(pnh, "matrix_rate", 2.0, 0.0, 30.0, "Hz", warnings);
   markers_rate_ = readDouble(pnh, "markers_rate", 1.0, 0.0, 30.0, "Hz", warnings);
@@ -97,11 +97,12 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   sync_warning_timeout_ = readDouble(pnh, "sync_warning_timeout", 5.0, 0.0, 3600.0, "s", warnings);
   session_ = uint32_t(readInt(pnh, "session", 0, 0, 1000000000, warnings));
   const int matrix_size = readInt(pnh, "matrix_size", 512, 16, 4096, warnings);
-  // On by default: it only runs once camera_info arrives; until then loops go out unverified.
-  verify_ = readBool(pnh, "verify", true, warnings);
-  verify_required_ = readBool(pnh, "verify_required", true, warnings);
+  // Off by default: the decision alone is measured trustworthy (doc/results.md). When on, a loop is only
+  // published verified (or, with ~verify_required false, flagged as unverified: has_relative_pose false).
+  options_.verify = readBool(pnh, "verify", false, warnings);
+  options_.verify_required = readBool(pnh, "verify_required", true, warnings);
   const double verify_memory = readDouble(pnh, "verify_memory", 256.0, 1.0, 65536.0, "MB", warnings);
-  features_ = openable::FeatureStore(size_t(verify_memory * 1024.0 * 1024.0));
+  options_.feature_bytes = size_t(verify_memory * 1024.0 * 1024.0);
   std::string matrix_mode = readString(pnh, "matrix_mode", "whole_history", warnings);
   const bool matrix_threshold_view = readBool(pnh, "matrix_threshold_view", false, warnings);
   if (matrix_mode != "whole_history" && matrix_mode != "rolling_window")
@@ -110,13 +111,13 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
                        "' is not allowed; expected whole_history | rolling_window; using whole_history");
     matrix_mode = "whole_history";
   }
-  if ((keyframe_distance_ > 0.0 || keyframe_angle_ > 0.0) && fixed_frame_.empty())
+  if ((options_.keyframe_distance > 0.0 || options_.keyframe_angle > 0.0) && fixed_frame_.empty())
   {
     warnings.push_back(
         "~keyframe_distance / ~keyframe_angle need ~fixed_frame for the camera poses; "
         "~fixed_frame is empty, so every frame is kept");
-    keyframe_distance_ = 0.0;
-    keyframe_angle_ = 0.0;
+    options_.keyframe_distance = 0.0;
+    options_.keyframe_angle = 0.0;
   }
   for (const auto& warning : warnings)
   {
@@ -126,9 +127,8 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   std::unique_lock<std::mutex> lock(mutex_);
   try
   {
-    describer_ = std::make_unique<openable::FrameDescriber>(config);
     config_ = config;
-    detector_ = std::make_unique<openable::LoopDetector>(config_);
+    detector_ = std::make_unique<openable::OnlineDetector>(config_, options_);
   }
   catch (const openable::Error& e)
   {
@@ -172,6 +172,7 @@ bool DetectorBase::setupDetector(const openable::Config& defaults)
   }
 
   loop_pub_ = nh.advertise<LoopClosure>("loop_closures", 100);
+  decisions_pub_ = nh.advertise<LoopClosure>("decisions", 100);
   markers_pub_ = nh.advertise<visualization_msgs::MarkerArray>("loop_markers", 1, true);
   image_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
   matrix_pub_ = image_transport_->advertise("distance_matrix", 1);
@@ -362,62 +363,27 @@ bool DetectorBase::lookupPoseLocked(const std_msgs::Header& header, std::array<d
   }
 }
 
-bool DetectorBase::isKeyframeLocked(bool has_pose, const std::array<double, 7>& pose)
-{
-  if (keyframe_distance_ <= 0.0 && keyframe_angle_ <= 0.0)
-  {
-    return true;
-  }
-  // Without a pose the motion is unknown: keeping the frame loses nothing, skipping it could.
-  if (!has_pose)
-  {
-    return true;
-  }
-  if (!has_keyframe_pose_)
-  {
-    has_keyframe_pose_ = true;
-    keyframe_pose_ = pose;
-    return true;
-  }
-  const double dx = pose[0] - keyframe_pose_[0];
-  const double dy = pose[1] - keyframe_pose_[1];
-  const double dz = pose[2] - keyframe_pose_[2];
-  const double distance = std::sqrt(dx * dx + dy * dy + dz * dz);
-  const tf2::Quaternion a(keyframe_pose_[3], keyframe_pose_[4], keyframe_pose_[5], keyframe_pose_[6]);
-  const tf2::Quaternion b(pose[3], pose[4], pose[5], pose[6]);
-  const double angle = a.normalized().angleShortestPath(b.normalized());
-  const bool moved = (keyframe_distance_ > 0.0 && distance >= keyframe_distance_) ||
-                     (keyframe_angle_ > 0.0 && angle >= keyframe_angle_);
-  if (moved)
-  {
-    keyframe_pose_ = pose;
-  }
-  return moved;
-}
-
 void DetectorBase::setCamera(const openable::PinholeCamera& camera)
 {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!verify_ || !ready_)
+  if (!options_.verify || !ready_)
   {
     return;
   }
-  if (verifier_)
+  const bool first = !detector_->hasVerifier();
+  try
   {
-    const openable::PinholeCamera& c = verifier_->camera();
-    if (c.fx != camera.fx || c.fy != camera.fy || c.cx != camera.cx || c.cy != camera.cy ||
-        c.baseline != camera.baseline)
+    if (!detector_->setCamera(camera))
     {
       warnThrottled("camera changed", 60.0,
                     "camera_info changed after the verifier was built; keeping the first calibration");
     }
-    return;
-  }
-  try
-  {
-    verifier_ = std::make_unique<openable::GeometricVerifier>(camera);
-    NODELET_INFO_STREAM("geometric verification on: fx " << camera.fx << ", baseline " << camera.baseline << " m ("
-                                                         << (camera.stereo() ? "stereo PnP" : "mono essential") << ")");
+    else if (first)
+    {
+      NODELET_INFO_STREAM("geometric verification on: fx " << camera.fx << ", baseline " << camera.baseline
+                                                           << " m (" << (camera.stereo() ? "stereo PnP" : "mono essential")
+                                                           << ")");
+    }
   }
   catch (const openable::Error& e)
   {
@@ -425,78 +391,7 @@ void DetectorBase::setCamera(const openable::PinholeCamera& camera)
   }
 }
 
-bool DetectorBase::verifyLoopLocked(const openable::Detection& detection, const openable::FrameFeatures* query,
-                                    LoopClosure& msg)
-{
-  if (!verify_)
-  {
-    return true;
-  }
-  std::string outcome;
-  if (!verifier_)
-  {
-    outcome = "no camera_info yet";
-  }
-  else if (!query)
-  {
-    outcome = "no query features";
-  }
-  else
-  {
-    const openable::FrameFeatures* match = features_.find(detection.best.id);
-    if (!match)
-    {
-      outcome = "match frame has no features (map or evicted)";
-    }
-    else
-    {
-      const openable::Verification v = verifier_->verify(*match, *query);
-      outcome = openable::toString(v.status);
-      if (v.accepted())
-      {
-        msg.has_relative_pose = true;
-        msg.relative_pose.pose.position.x = v.translation[0];
-        msg.relative_pose.pose.position.y = v.translation[1];
-        msg.relative_pose.pose.position.z = v.translation[2];
-        tf2::Matrix3x3 rotation(v.rotation(0, 0), v.rotation(0, 1), v.rotation(0, 2), v.rotation(1, 0),
-                                v.rotation(1, 1), v.rotation(1, 2), v.rotation(2, 0), v.rotation(2, 1),
-                                v.rotation(2, 2));
-        tf2::Quaternion q;
-        rotation.getRotation(q);
-        msg.relative_pose.pose.orientation.x = q.x();
-        msg.relative_pose.pose.orientation.y = q.y();
-        msg.relative_pose.pose.orientation.z = q.z();
-        msg.relative_pose.pose.orientation.w = q.w();
-        for (int r = 0; r < 6; ++r)
-        {
-          for (int c = 0; c < 6; ++c)
-          {
-            msg.relative_pose.covariance[size_t(r * 6 + c)] = v.covariance(r, c);
-          }
-        }
-        ++verification_results_["accepted"];
-        return true;
-      }
-      outcome += v.reason.empty() ? "" : " (" + v.reason + ")";
-      ++verification_results_[openable::toString(v.status)];
-      if (verify_required_)
-      {
-        warnThrottled("verification", kWarnPeriod,
-                      "loop closure " + std::to_string(detection.query_id) + " -> " +
-                          std::to_string(detection.best.id) + " not published: geometric verification " + outcome);
-        return false;
-      }
-      return true;
-    }
-  }
-  // Verification could not run: the loop goes out unverified (has_relative_pose false).
-  ++verification_results_[outcome];
-  warnThrottled("verification unavailable", 30.0, "~verify: loop closure published unverified: " + outcome);
-  return true;
-}
-
-void DetectorBase::processFrame(const std_msgs::Header& header, const std::string& topic,
-                                const DescribeFunction& describe, const VerifyImages& verify_images)
+void DetectorBase::processFrame(const std_msgs::Header& header, const std::string& topic, openable::FrameInput input)
 {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!ready_)
@@ -508,28 +403,15 @@ void DetectorBase::processFrame(const std_msgs::Header& header, const std::strin
   {
     return;
   }
+  input.stamp = header.stamp.toSec();
+  input.session = session_;
+  input.source = topic;
+  input.has_pose = lookupPoseLocked(header, input.pose);
 
-  openable::FrameInfo info;
-  info.stamp = header.stamp.toSec();
-  info.session = session_;
-  info.source = topic;
-  info.has_pose = lookupPoseLocked(header, info.pose);
-  if (!isKeyframeLocked(info.has_pose, info.pose))
-  {
-    ++frames_skipped_keyframe_;
-    return;
-  }
-
-  openable::FrameDescriptor descriptor;
-  openable::Detection detection;
+  openable::FrameOutcome outcome;
   try
   {
-    const auto start_describe = std::chrono::steady_clock::now();
-    descriptor = describe(*describer_);
-    describe_latency_.add(millisecondsSince(start_describe));
-    const auto start_match = std::chrono::steady_clock::now();
-    detection = detector_->process(descriptor, info);
-    match_latency_.add(millisecondsSince(start_match));
+    outcome = detector_->process(input);
   }
   catch (const openable::Error& e)
   {
@@ -550,80 +432,63 @@ void DetectorBase::processFrame(const std_msgs::Header& header, const std::strin
     warnThrottled("exception", kWarnPeriod, "'" + topic + "': " + e.what() + " (frame skipped)");
     return;
   }
+  ++statuses_[openable::toString(outcome.status)];
+  if (!outcome.stored)
+  {
+    ++frames_skipped_keyframe_;
+    return;
+  }
+  describe_latency_.add(outcome.times.preprocess_ms + outcome.times.describe_ms);
+  match_latency_.add(outcome.times.match_ms);
   if (!detector_->localisationMode())
   {
     ++frames_stored_;
   }
-  // Features of this frame for verifying its loops (and, stored, the loops of later frames to it).
-  std::unique_ptr<openable::FrameFeatures> features;
-  if (verifier_ && !verify_images.left.empty())
+  if (outcome.status == openable::FrameStatus::FailedVerification ||
+      outcome.status == openable::FrameStatus::Unverified)
   {
-    try
-    {
-      features = std::make_unique<openable::FrameFeatures>(
-          verifier_->extract(verify_images.left, verify_images.right, detection.query_id));
-    }
-    catch (const openable::Error& e)
-    {
-      warnThrottled("features", kWarnPeriod, "'" + topic + "': no features for verification: " + e.what());
-    }
-    catch (const cv::Exception& e)
-    {
-      warnThrottled("features", kWarnPeriod, "'" + topic + "': no features for verification (OpenCV): " + e.what());
-    }
+    warnThrottled("verification", kWarnPeriod,
+                  "loop closure " + std::to_string(outcome.query.id) + " -> " +
+                      std::to_string(outcome.detection.best.id) + " not published (" +
+                      openable::toString(outcome.status) + "): " + outcome.verification_note);
   }
-  if (info.has_pose)
+  if (input.has_pose)
   {
-    trajectory_.push_back(position(info.pose));
+    trajectory_.push_back(position(input.pose));
     while (trajectory_.size() > kMaxTrajectoryPoints)
     {
       trajectory_.pop_front();
     }
   }
-
   if (matrix_rate_ > 0.0)
   {
-    detector_->lastRow(row_);
-    view_.addRow(detector_->database().firstId(), row_);
+    detector_->loopDetector().lastRow(row_);
+    view_.addRow(detector_->loopDetector().database().firstId(), row_);
   }
-  if (detection.accepted)
-  {
-    publishLoopLocked(header, detection, info, features.get());
-  }
-  if (features && !detector_->localisationMode())
-  {
-    features_.insert(std::move(*features));
-  }
+  publishOutcomeLocked(header, outcome);
   publishMatrixLocked(header);
-  publishMarkersLocked(header, detection.accepted);
+  publishMarkersLocked(header, outcome.published());
 }
 
-void DetectorBase::publishLoopLocked(const std_msgs::Header& header, const openable::Detection& detection,
-                                     const openable::FrameInfo& query, const openable::FrameFeatures* features)
+void DetectorBase::publishOutcomeLocked(const std_msgs::Header& header, const openable::FrameOutcome& outcome)
 {
-  // Positions shift when the history evicts its oldest frames while storing the query: find the match
-  // by id. An evicted match still gives a message, without its stamp and pose.
-  const openable::PlaceDatabase& database = detector_->database();
-  const openable::FrameInfo* match = nullptr;
-  if (detection.best.id >= database.firstId() && detection.best.id - database.firstId() < database.size())
+  LoopClosurePtr msg = makeLoopClosure(header, outcome);
+  if (decisions_pub_.getNumSubscribers() > 0)
   {
-    match = &database.info(size_t(detection.best.id - database.firstId()));
+    decisions_pub_.publish(LoopClosureConstPtr(msg));
   }
-  LoopClosurePtr msg = makeLoopClosure(header, detection, query, match);
-  if (!verifyLoopLocked(detection, features, *msg))
+  if (!outcome.published())
   {
     return;
   }
   ++loops_accepted_;
   if (matrix_rate_ > 0.0)
   {
-    view_.addLoop(detection.best.id);
+    view_.addLoop(outcome.detection.best.id);
   }
   if (msg->has_poses)
   {
-    geometry_msgs::Point a = msg->query_pose.position;
-    geometry_msgs::Point b = msg->match_pose.position;
-    loop_edges_.emplace_back(a, b);
+    loop_edges_.emplace_back(msg->query_pose.position, msg->match_pose.position);
     while (loop_edges_.size() > kMaxLoopEdges)
     {
       loop_edges_.pop_front();
@@ -720,8 +585,6 @@ void DetectorBase::resetStreamLocked()
   view_.clear();
   trajectory_.clear();
   loop_edges_.clear();
-  features_.clear();
-  has_keyframe_pose_ = false;
   last_stamp_ = ros::Time();
 }
 
@@ -736,7 +599,7 @@ bool DetectorBase::loadMapLocked(const std::string& path, std::string& message)
     catch (const openable::Error& e)
     {
       message = "map '" + path + "' refused: " + e.what();
-      return openable::PlaceDatabase(describer_->layout());
+      return openable::PlaceDatabase(detector_->describer().layout());
     }
   }();
   if (!message.empty())
@@ -773,7 +636,7 @@ bool DetectorBase::loadMapLocked(const std::string& path, std::string& message)
     message = "map '" + path + "' refused: it was built with an incompatible configuration: " + differences;
     return false;
   }
-  if (map.layout() != describer_->layout())
+  if (map.layout() != detector_->describer().layout())
   {
     message = "map '" + path + "' refused: its descriptor layout differs from this detector's";
     return false;
@@ -781,7 +644,7 @@ bool DetectorBase::loadMapLocked(const std::string& path, std::string& message)
   try
   {
     const size_t frames = map.size();
-    auto detector = std::make_unique<openable::LoopDetector>(config_, std::move(map));
+    auto detector = std::make_unique<openable::OnlineDetector>(config_, std::move(map), options_);
     detector_ = std::move(detector);
     message = "map '" + path + "' loaded: " + std::to_string(frames) + " frames; localising against it";
   }
@@ -790,11 +653,9 @@ bool DetectorBase::loadMapLocked(const std::string& path, std::string& message)
     message = "map '" + path + "' refused: " + e.what();
     return false;
   }
-  features_.clear();
   view_.clear();
   trajectory_.clear();
   loop_edges_.clear();
-  has_keyframe_pose_ = false;
   return true;
 }
 
@@ -819,9 +680,9 @@ bool DetectorBase::saveMap(SaveMap::Request& request, SaveMap::Response& respons
   }
   try
   {
-    detector_->database().save(path);
+    detector_->loopDetector().database().save(path);
     response.success = true;
-    response.frames = uint32_t(detector_->database().size());
+    response.frames = uint32_t(detector_->loopDetector().database().size());
     response.message = "saved " + std::to_string(response.frames) + " frames to '" + path + "'";
     NODELET_INFO_STREAM(response.message);
   }
@@ -847,7 +708,7 @@ bool DetectorBase::loadMap(LoadMap::Request& request, LoadMap::Response& respons
   std::string message;
   response.success = loadMapLocked(path, message);
   response.message = message;
-  response.frames = response.success ? uint32_t(detector_->database().size()) : 0;
+  response.frames = response.success ? uint32_t(detector_->loopDetector().database().size()) : 0;
   if (response.success)
   {
     NODELET_INFO_STREAM(message);
@@ -895,7 +756,7 @@ void DetectorBase::reconfigure(DetectorConfig& config, uint32_t /*level*/)
   next.color_map = config.color_map;
   try
   {
-    detector_->updateMatching(next);
+    detector_->updateConfig(next);
     config_ = next;
   }
   catch (const openable::Error& e)
@@ -977,22 +838,21 @@ void DetectorBase::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
   status.add("threshold", config_.threshold);
   status.add("sequence length", config_.sequence_length);
   status.add("exclusion window", config_.exclusion_window);
-  status.add("history size", detector_->database().size());
-  status.add("history bytes", detector_->database().bytes());
+  status.add("history size", detector_->loopDetector().database().size());
+  status.add("history bytes", detector_->loopDetector().database().bytes());
   status.add("describe latency last (ms)", describe_latency_.last_ms);
   status.add("describe latency mean (ms)", describe_latency_.mean());
   status.add("match latency last (ms)", match_latency_.last_ms);
   status.add("match latency mean (ms)", match_latency_.mean());
   status.add("loop closures", loops_accepted_);
   status.add("distance_matrix images published", matrix_published_);
-  if (verify_)
+  if (options_.verify)
   {
-    status.add("verification", verifier_ ? "on" : "waiting for camera_info");
-    status.add("verification features bytes", features_.bytes());
-    for (const auto& r : verification_results_)
-    {
-      status.add("verification: " + r.first, r.second);
-    }
+    status.add("verification", detector_->hasVerifier() ? "on" : "waiting for camera_info");
+  }
+  for (const auto& r : statuses_)
+  {
+    status.add("frames " + r.first, r.second);
   }
 }
 

@@ -37,13 +37,13 @@ TEST(Config, DefaultsAreThePapersAndValid)
   EXPECT_TRUE(c.validate().empty());
 }
 
-TEST(Config, DefaultYamlFileHoldsEveryKeyWithItsDefault)
+TEST(Config, PaperYamlFileHoldsEveryKeyWithItsDefault)
 {
-  const Config file = Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml");
+  const Config file = Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/paper.yaml");
   const Config defaults;
   for (const auto& key : Config::keys())
     EXPECT_EQ(file.get(key.name), defaults.get(key.name)) << key.name;
-  std::ifstream in(std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml");
+  std::ifstream in(std::string(OPENABLE_SOURCE_DIR) + "/config/paper.yaml");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const auto& key : Config::keys())
     EXPECT_NE(text.find("\n" + key.name + ":"), std::string::npos) << key.name << " is not documented";

@@ -37,7 +37,7 @@ Result run(const std::string& arguments)
 
 std::string config()
 {
-  return std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml";
+  return std::string(OPENABLE_SOURCE_DIR) + "/config/paper.yaml";
 }
 
 std::string freshDir(const std::string& name)
@@ -64,7 +64,7 @@ TEST(OfflineTool, DayLeftVsNightRightWritesA200By200Matrix)
   std::ifstream csv(out + "/loop_closures.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header, "query,match,distance");
+  EXPECT_EQ(header, "query,match,distance,score,status");
   std::ifstream json(out + "/timings.json");
   const std::string timings((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
   for (const char* key :
