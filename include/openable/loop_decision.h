@@ -45,8 +45,9 @@ public:
 
   /// Decides on one matched frame. Returns Published when every rule passes; verification comes after.
   FrameStatus decide(const Detection& detection);
-  /// The decision score, higher = surer: the uniqueness of the best match (0 without candidates).
-  static float score(const Detection& detection);
+  /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
+  /// candidates, or fewer than min_candidates: a lone candidate has no rival and would score 1).
+  float score(const Detection& detection) const;
 
   /// Takes new values of the decision keys (threshold, min_uniqueness, min_candidates, consistent_frames,
   /// consistency_tolerance); the consistency run restarts.

@@ -45,9 +45,11 @@ void LoopDecision::reset()
   run_ = 0;
 }
 
-float LoopDecision::score(const Detection& detection)
+float LoopDecision::score(const Detection& detection) const
 {
-  return detection.has_candidates ? detection.uniqueness : 0.0f;
+  const bool meaningful =
+      detection.has_candidates && detection.candidates >= static_cast<size_t>(config_.min_candidates);
+  return meaningful ? detection.uniqueness : 0.0f;
 }
 
 bool LoopDecision::gatesPass(const Detection& detection, FrameStatus& why) const

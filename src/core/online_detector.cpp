@@ -152,7 +152,7 @@ FrameOutcome OnlineDetector::process(const FrameInput& input)
   outcome.stored = true;
   outcome.query.id = outcome.detection.query_id;
   outcome.status = decision_.decide(outcome.detection);
-  outcome.score = LoopDecision::score(outcome.detection);
+  outcome.score = decision_.score(outcome.detection);
   if (outcome.detection.has_candidates)
   {
     const PlaceDatabase& database = detector_.database();

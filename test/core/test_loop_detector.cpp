@@ -43,7 +43,8 @@ TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
   {
     const Detection d = detector.process(frames[i]);
     EXPECT_EQ(d.query_id, uint64_t(i));
-    EXPECT_EQ(d.has_candidates, i > c.exclusion_window);
+    // Loop-closure mode compares full sequences only: the first is complete L - 1 frames after the window.
+    EXPECT_EQ(d.has_candidates, i > c.exclusion_window + c.sequence_length - 1);
     if (i >= 64 && i < 80)  // full sequences inside the revisit
     {
       EXPECT_TRUE(d.accepted) << i;

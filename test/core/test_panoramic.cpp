@@ -80,8 +80,9 @@ TEST(Panoramic, BackwardRevisitIsFoundWithDirectionMinusOneAndShiftTwo)
     ++checked;
     found += std::abs(long(d.best.id) - place) <= 2 && d.best.direction == -1 && d.best.shift == 2;
   }
-  // Measured: 31 of the 36 places with a full reverse sequence.
-  EXPECT_GE(found, 31) << found << " of " << checked;
+  // Measured: 30 of the 36 places with a full reverse sequence (31 while partial sequences at the ends of
+  // the history were candidates too; loop-closure mode now compares full sequences only).
+  EXPECT_GE(found, 30) << found << " of " << checked;
 }
 
 TEST(Panoramic, WithoutBidirectionalMatchingTheBackwardDriveIsMostlyMissed)

@@ -1,0 +1,161 @@
+// LoopDecision: known answers on hand-made detections, and a property test against a naive reference.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <random>
+
+#include "openable/loop_decision.h"
+
+using namespace openable;
+
+namespace
+{
+Config decisionConfig()
+{
+  Config c;
+  c.min_uniqueness = 0.1;
+  c.min_candidates = 10;
+  c.consistent_frames = 3;
+  c.consistency_tolerance = 1;
+  return c;
+}
+
+Detection candidate(uint64_t match, float uniqueness, size_t candidates = 100, float distance = 0.2f, int direction = 1)
+{
+  Detection d;
+  d.has_candidates = true;
+  d.candidates = candidates;
+  d.best.id = match;
+  d.best.distance = distance;
+  d.best.direction = static_cast<int8_t>(direction);
+  d.uniqueness = uniqueness;
+  return d;
+}
+}  // namespace
+
+TEST(LoopDecision, StatusWordsAreTheDocumentedOnes)
+{
+  EXPECT_STREQ(toString(FrameStatus::Published), "published");
+  EXPECT_STREQ(toString(FrameStatus::TooEarly), "too_early");
+  EXPECT_STREQ(toString(FrameStatus::Excluded), "excluded");
+  EXPECT_STREQ(toString(FrameStatus::AboveThreshold), "above_threshold");
+  EXPECT_STREQ(toString(FrameStatus::NotUnique), "not_unique");
+  EXPECT_STREQ(toString(FrameStatus::Inconsistent), "inconsistent");
+  EXPECT_STREQ(toString(FrameStatus::FailedVerification), "failed_verification");
+  EXPECT_STREQ(toString(FrameStatus::Unverified), "unverified");
+  EXPECT_STREQ(toString(FrameStatus::NotKeyframe), "not_keyframe");
+  EXPECT_STREQ(toString(FrameStatus::TimeJump), "time_jump");
+}
+
+TEST(LoopDecision, SaysWhyThereIsNoLoop)
+{
+  LoopDecision decision(decisionConfig());
+  Detection nothing;
+  EXPECT_EQ(decision.decide(nothing), FrameStatus::TooEarly);
+  nothing.excluded = true;
+  EXPECT_EQ(decision.decide(nothing), FrameStatus::Excluded);
+  EXPECT_EQ(decision.decide(candidate(5, 1.0f, 9)), FrameStatus::TooEarly);  // a lone candidate is not "unique"
+  EXPECT_EQ(decision.decide(candidate(5, 0.05f)), FrameStatus::NotUnique);
+
+  Config thresholded = decisionConfig();
+  thresholded.threshold = 0.1;
+  LoopDecision gated(thresholded);
+  EXPECT_EQ(gated.decide(candidate(5, 0.9f, 100, 0.2f)), FrameStatus::AboveThreshold);
+
+  Config ungated = decisionConfig();
+  ungated.min_uniqueness = 0.0;
+  LoopDecision open(ungated);
+  EXPECT_EQ(open.decide(candidate(5, 0.9f)), FrameStatus::NotUnique);  // no gate: nothing is a loop
+}
+
+TEST(LoopDecision, PublishesOnlyAfterConsistentFramesAdvanceTogether)
+{
+  LoopDecision decision(decisionConfig());
+  EXPECT_EQ(decision.decide(candidate(40, 0.3f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(41, 0.3f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(42, 0.3f)), FrameStatus::Published);
+  EXPECT_EQ(decision.decide(candidate(44, 0.3f)), FrameStatus::Published);  // one frame off: within tolerance 1
+  EXPECT_EQ(decision.decide(candidate(90, 0.3f)), FrameStatus::Inconsistent);  // jumped: a new run starts
+  EXPECT_EQ(decision.decide(candidate(91, 0.3f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(92, 0.01f)), FrameStatus::NotUnique);  // a failing frame ends the run
+  EXPECT_EQ(decision.decide(candidate(93, 0.3f)), FrameStatus::Inconsistent);
+}
+
+TEST(LoopDecision, AMatchThatStaysPutNeverBecomesConsistent)
+{
+  // A "hub" place that every frame matches (a tunnel, a wall): each step of 0 is within the tolerance of
+  // 1, but over the run the match does not advance with the frames.
+  LoopDecision decision(decisionConfig());
+  for (int i = 0; i < 20; ++i)
+    EXPECT_NE(decision.decide(candidate(19, 0.5f)), FrameStatus::Published) << i;
+}
+
+TEST(LoopDecision, ReverseRevisitsAdvanceBackwards)
+{
+  LoopDecision decision(decisionConfig());
+  EXPECT_EQ(decision.decide(candidate(50, 0.3f, 100, 0.2f, -1)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(49, 0.3f, 100, 0.2f, -1)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(48, 0.3f, 100, 0.2f, -1)), FrameStatus::Published);
+  EXPECT_EQ(decision.decide(candidate(49, 0.3f, 100, 0.2f, 1)), FrameStatus::Inconsistent);  // direction changed
+}
+
+TEST(LoopDecision, ScoreIsTheUniquenessAndZeroWhileTooEarly)
+{
+  const LoopDecision decision(decisionConfig());
+  EXPECT_FLOAT_EQ(decision.score(candidate(1, 0.25f)), 0.25f);
+  EXPECT_FLOAT_EQ(decision.score(candidate(1, 1.0f, 9)), 0.0f);  // a lone candidate: no rival, no meaning
+  EXPECT_FLOAT_EQ(decision.score(Detection()), 0.0f);
+}
+
+TEST(LoopDecision, EqualsANaiveReferenceOnRandomStreams)
+{
+  // The reference re-derives each decision from the whole list of earlier detections.
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 50; ++trial)
+  {
+    Config c = decisionConfig();
+    c.consistent_frames = 1 + trial % 5;
+    c.consistency_tolerance = trial % 3;
+    LoopDecision decision(c);
+    std::vector<Detection> seen;
+    uint64_t match = 100;
+    for (int t = 0; t < 200; ++t)
+    {
+      const int kind = std::uniform_int_distribution<int>(0, 9)(rng);
+      match = kind < 6 ? match + 1 : (kind < 8 ? match + std::uniform_int_distribution<int>(0, 4)(rng) : 300 - match % 50);
+      const float u = std::uniform_real_distribution<float>(0.0f, 0.3f)(rng);
+      seen.push_back(candidate(match, u));
+      // Naive: the run is the longest suffix of gate-passing frames where every step and the whole span
+      // advance one place per frame within the tolerance.
+      const auto passes = [&c](const Detection& d) { return d.uniqueness >= c.min_uniqueness; };
+      FrameStatus expected = FrameStatus::NotUnique;
+      if (passes(seen.back()))
+      {
+        // Runs restart where a step or the span from the run's start breaks: replay from the start.
+        int run = 0;
+        uint64_t start = 0, previous = 0;
+        for (const Detection& d : seen)
+        {
+          if (!passes(d))
+          {
+            run = 0;
+            continue;
+          }
+          const long id = static_cast<long>(d.best.id);
+          const bool agrees = run > 0 && std::labs(id - static_cast<long>(previous) - 1) <= c.consistency_tolerance &&
+                              std::labs(id - static_cast<long>(start) - run) <= c.consistency_tolerance;
+          if (agrees)
+            ++run;
+          else
+          {
+            run = 1;
+            start = d.best.id;
+          }
+          previous = d.best.id;
+        }
+        expected = run >= c.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;
+      }
+      ASSERT_EQ(decision.decide(seen.back()), expected) << "trial " << trial << " frame " << t;
+    }
+  }
+}

@@ -1,0 +1,271 @@
+// OnlineDetector on real images: what it publishes in loop-closure mode (one stream revisiting itself),
+// streams that must publish nothing, keyframes, time jumps, verification policy and map refusal.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+
+#include "openable/error.h"
+#include "openable/online_detector.h"
+#include "test_util.h"
+
+using namespace openable;
+
+namespace
+{
+Config shipped(const std::string& name)
+{
+  return Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/" + name + ".yaml");
+}
+
+cv::Mat nordland(const std::string& season, int index)
+{
+  char name[48];
+  std::snprintf(name, sizeof(name), "nordland/%s/images-%05d.png", season.c_str(), (index + 1) * 10);
+  return cv::imread(openable_test::sharedData(name), cv::IMREAD_COLOR);
+}
+
+/// Frames of one traversal after another, loaded once per test binary.
+const std::vector<cv::Mat>& gardensPointStream(const std::string& first, const std::string& second)
+{
+  static std::map<std::string, std::vector<cv::Mat>> cache;
+  std::vector<cv::Mat>& frames = cache[first + "+" + second];
+  if (frames.empty())
+    for (const std::string& traversal : {first, second})
+      for (int i = 0; i < 200 && !traversal.empty(); ++i)
+        frames.push_back(openable_test::gardensPoint(traversal, i));
+  return frames;
+}
+
+std::vector<FrameOutcome> runStream(const std::vector<cv::Mat>& frames, const Config& config,
+                                    const OnlineOptions& options = OnlineOptions())
+{
+  OnlineDetector detector(config, options);
+  std::vector<FrameOutcome> outcomes;
+  for (size_t i = 0; i < frames.size(); ++i)
+  {
+    FrameInput input;
+    input.image = frames[i];
+    input.stamp = 1.0 + double(i);
+    outcomes.push_back(detector.process(input));
+  }
+  return outcomes;
+}
+
+struct Scored
+{
+  int published = 0;
+  int wrong = 0;
+  double precision = 1.0;
+  double recall = 0.0;
+};
+
+/// Joined stream: frame `half + i` is the place of frame i (within `tolerance`); earlier frames have no loop.
+Scored score(const std::vector<FrameOutcome>& outcomes, size_t half, long tolerance)
+{
+  Scored s;
+  int correct = 0;
+  for (size_t t = 0; t < outcomes.size(); ++t)
+  {
+    if (!outcomes[t].published())
+      continue;
+    ++s.published;
+    const long match = static_cast<long>(outcomes[t].detection.best.id);
+    const bool right = t >= half && std::labs(match - static_cast<long>(t - half)) <= tolerance;
+    correct += right ? 1 : 0;
+    s.wrong += right ? 0 : 1;
+  }
+  s.precision = s.published ? double(correct) / s.published : 1.0;
+  s.recall = double(correct) / double(outcomes.size() - half);
+  return s;
+}
+}  // namespace
+
+TEST(OnlineDetector, DefaultConfigurationPublishesTrustworthyLoopsDayThenNight)
+{
+  const auto outcomes = runStream(gardensPointStream("day_right", "night_right"), shipped("default"));
+  const Scored s = score(outcomes, 200, 2);
+  EXPECT_EQ(s.wrong, 0) << s.published << " published";
+  EXPECT_GE(s.precision, 0.99);
+  EXPECT_GE(s.recall, 0.3);  // measured 0.56
+  for (size_t t = 0; t < 200; ++t)
+    EXPECT_FALSE(outcomes[t].published()) << "frame " << t << " of the first traversal has no loop";
+}
+
+TEST(OnlineDetector, GardensPointConfigurationPublishesTrustworthyLoopsDayThenNight)
+{
+  const Scored s = score(runStream(gardensPointStream("day_right", "night_right"), shipped("gardens_point")), 200, 2);
+  EXPECT_GE(s.precision, 0.99) << s.wrong << " wrong of " << s.published;
+  EXPECT_GE(s.recall, 0.5);  // measured 0.535
+}
+
+TEST(OnlineDetector, StreamsWithoutRevisitPublishNothing)
+{
+  for (const char* config : {"default", "gardens_point"})
+  {
+    const auto outcomes = runStream(gardensPointStream("day_left", ""), shipped(config));
+    for (size_t t = 0; t < outcomes.size(); ++t)
+      EXPECT_FALSE(outcomes[t].published()) << config << ": day_left frame " << t;
+  }
+  std::vector<cv::Mat> summer;
+  for (int i = 0; i < 1800; ++i)
+    summer.push_back(nordland("summer", i));
+  for (const char* config : {"default", "nordland"})
+  {
+    const auto outcomes = runStream(summer, shipped(config));
+    int published = 0;
+    for (const auto& o : outcomes)
+      published += o.published() ? 1 : 0;
+    EXPECT_EQ(published, 0) << config << ": Nordland summer alone";
+  }
+}
+
+TEST(OnlineDetector, ARobotStandingStillClosesNoLoop)
+{
+  const std::vector<cv::Mat> still(300, openable_test::gardensPoint("day_right", 10));
+  const auto outcomes = runStream(still, shipped("default"));
+  for (size_t t = 0; t < outcomes.size(); ++t)
+  {
+    ASSERT_FALSE(outcomes[t].published()) << t;
+    if (t > 150)
+      EXPECT_EQ(outcomes[t].status, FrameStatus::NotUnique) << t;
+  }
+}
+
+TEST(OnlineDetector, AStreamShorterThanASequenceIsTooEarlyOrExcluded)
+{
+  const std::vector<cv::Mat>& frames = gardensPointStream("day_right", "");
+  const auto outcomes = runStream(std::vector<cv::Mat>(frames.begin(), frames.begin() + 25), shipped("default"));
+  for (size_t t = 0; t < outcomes.size(); ++t)
+  {
+    EXPECT_TRUE(outcomes[t].stored);
+    EXPECT_TRUE(outcomes[t].status == FrameStatus::TooEarly || outcomes[t].status == FrameStatus::Excluded)
+        << t << ": " << toString(outcomes[t].status);
+  }
+}
+
+TEST(OnlineDetector, ATimeJumpIsRefusedAndNothingIsStored)
+{
+  OnlineDetector detector(shipped("default"));
+  FrameInput input;
+  input.image = openable_test::gardensPoint("day_right", 0);
+  for (double stamp : {10.0, 11.0, 12.0})
+  {
+    input.stamp = stamp;
+    EXPECT_TRUE(detector.process(input).stored);
+  }
+  input.stamp = 5.0;
+  const FrameOutcome jumped = detector.process(input);
+  EXPECT_EQ(jumped.status, FrameStatus::TimeJump);
+  EXPECT_FALSE(jumped.stored);
+  EXPECT_EQ(detector.loopDetector().database().size(), 3u);
+  detector.reset();  // a new stream may start earlier
+  EXPECT_TRUE(detector.process(input).stored);
+}
+
+TEST(OnlineDetector, ExclusionInSecondsKeepsRecentFramesOut)
+{
+  Config c = shipped("paper");
+  c.exclusion_window = 0;
+  c.exclusion_seconds = 30.0;
+  c.min_candidates = 1;
+  OnlineDetector detector(c);
+  FrameInput input;
+  input.image = openable_test::gardensPoint("day_right", 0);
+  FrameOutcome outcome;
+  for (int i = 0; i < 40; ++i)  // one frame a second
+  {
+    input.stamp = 100.0 + i;
+    outcome = detector.process(input);
+    if (i > 0 && i < 30)
+      EXPECT_EQ(outcome.status, FrameStatus::Excluded) << i;
+  }
+  EXPECT_EQ(outcome.detection.candidates, 10u);  // frames 0..9 are 30 s or more before frame 39
+}
+
+TEST(OnlineDetector, KeyframesByDistanceAndAngle)
+{
+  OnlineOptions options;
+  options.keyframe_distance = 1.0;
+  OnlineDetector by_distance(shipped("paper"), options);
+  options.keyframe_distance = 0.0;
+  options.keyframe_angle = 0.5;
+  OnlineDetector by_angle(shipped("paper"), options);
+  FrameInput input;
+  input.image = openable_test::gardensPoint("day_right", 0);
+  input.has_pose = true;
+  int stored_distance = 0, stored_angle = 0;
+  for (int i = 0; i < 20; ++i)
+  {
+    input.stamp = 1.0 + i;
+    input.pose = {0.3 * i, 0, 0, 0, 0, 0, 1};  // 0.3 m a frame, no rotation
+    const FrameOutcome moved = by_distance.process(input);
+    stored_distance += moved.stored;
+    if (!moved.stored)
+      EXPECT_EQ(moved.status, FrameStatus::NotKeyframe);
+    const double half = 0.1 * i;  // 0.2 rad a frame about z
+    input.pose = {0, 0, 0, 0, 0, std::sin(half), std::cos(half)};
+    stored_angle += by_angle.process(input).stored;
+  }
+  EXPECT_EQ(stored_distance, 5);  // at 0, 1.2, 2.4, 3.6 and 4.8 m (frames 0, 4, 8, 12, 16)
+  EXPECT_EQ(stored_angle, 7);     // every third frame turns 0.6 rad >= 0.5
+}
+
+TEST(OnlineDetector, RequiredVerificationNeverLetsAnUnverifiedLoopThrough)
+{
+  const auto& frames = gardensPointStream("day_right", "night_right");
+  OnlineOptions options;
+  options.verify = true;  // but no camera is ever given
+  const auto required = runStream(frames, shipped("default"), options);
+  options.verify_required = false;
+  const auto flagged = runStream(frames, shipped("default"), options);
+  int unverified = 0, published = 0;
+  for (size_t t = 0; t < frames.size(); ++t)
+  {
+    EXPECT_FALSE(required[t].published()) << t;
+    unverified += required[t].status == FrameStatus::Unverified;
+    published += flagged[t].published();
+    EXPECT_FALSE(flagged[t].verified);
+    if (flagged[t].published())
+      EXPECT_EQ(flagged[t].verification_note, "no camera yet");
+  }
+  EXPECT_GT(unverified, 50);
+  EXPECT_EQ(unverified, published);  // the same candidates: flagged instead of dropped
+}
+
+TEST(OnlineDetector, RefusesAnEmptyMapAndAMapOfAnotherConfiguration)
+{
+  const Config hog = shipped("default");
+  EXPECT_THROW(OnlineDetector(hog, PlaceDatabase(OnlineDetector(hog).describer().layout())), Error);
+  const Config ldb = shipped("paper");
+  PlaceDatabase map(OnlineDetector(ldb).describer().layout(), 0, ldb.toYaml());
+  map.add(OnlineDetector(ldb).describe(FrameInput{openable_test::gardensPoint("day_right", 0)}));
+  EXPECT_THROW(OnlineDetector(hog, map), Error);
+  EXPECT_NO_THROW(OnlineDetector(ldb, map));
+}
+
+TEST(OnlineDetector, BadInputThrowsBeforeAnythingIsStored)
+{
+  OnlineDetector detector(shipped("default"));
+  EXPECT_THROW(detector.process(FrameInput()), Error);
+  EXPECT_EQ(detector.loopDetector().database().size(), 0u);
+  Config stereo = shipped("paper");
+  stereo.camera_type = "stereo";
+  stereo.descriptor = "D-LDB";
+  OnlineDetector dldb(stereo);
+  FrameInput left_only;
+  left_only.image = openable_test::gardensPoint("day_right", 0);
+  try
+  {
+    dldb.process(left_only);
+    FAIL() << "D-LDB without right image or disparity was accepted";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("right image or a disparity"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(dldb.loopDetector().database().size(), 0u);
+}
