@@ -1,0 +1,52 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace openable
+{
+/// What the loop-closure detector decided for one frame: a row of openable_offline's decisions.csv (one per
+/// frame) or loop_closures.csv (one per published loop closure).
+struct LoopDecision
+{
+  /// 0-based frame index of the stream (the query row of distance_matrix.npy).
+  int query = -1;
+  /// 0-based frame index of the best match; -1 when the frame had no candidate.
+  int match = -1;
+  /// NaN when the frame had no candidate.
+  double distance = 0.0;
+  /// Higher = surer; NaN when the frame had no candidate.
+  double score = 0.0;
+  /// One of loopDecisionStatuses().
+  std::string status;
+  /// The `accepted` column of decisions.csv (false in loop_closures.csv, which has none).
+  bool accepted = false;
+  /// 1-based line of the file, for messages.
+  int line = 0;
+
+  bool published() const
+  {
+    return status == "published";
+  }
+};
+
+/// The rows of one file, and whether it is a per-frame decisions file (it has an `accepted` column).
+struct LoopDecisionTable
+{
+  std::string path;
+  std::vector<LoopDecision> rows;
+  bool per_frame = false;
+};
+
+/// Every status openable_offline writes; "published" is the one that means "published as a loop closure".
+const std::vector<std::string>& loopDecisionStatuses();
+
+/// Reads loop_closures.csv (`query,match,distance,score,status`, maybe more columns such as `direction,shift`)
+/// or decisions.csv (the same plus `accepted`). Columns are found by name in the header, so their order and
+/// extra columns do not matter. Throws Error naming the file, and the line where one is at fault: missing
+/// file, a missing column, a row with the wrong number of fields, a bad number, a status not in
+/// loopDecisionStatuses(), accepted not 0/1, a published row without a match, or a loop_closures.csv row
+/// that is not published.
+LoopDecisionTable loadLoopDecisions(const std::string& path);
+
+}  // namespace openable
