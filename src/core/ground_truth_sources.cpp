@@ -17,8 +17,8 @@ GroundTruth joinedGroundTruth(int num_frames, int joined, int tolerance)
   if (joined <= 0 || joined >= num_frames)
   {
     throw Error("joined ground truth: the second traversal must start at a frame in [1, " +
-                std::to_string(num_frames - 1) + "] of the " + std::to_string(num_frames) +
-                "-frame stream, got " + std::to_string(joined));
+                std::to_string(num_frames - 1) + "] of the " + std::to_string(num_frames) + "-frame stream, got " +
+                std::to_string(joined));
   }
   if (tolerance < 0)
   {
@@ -30,8 +30,8 @@ GroundTruth joinedGroundTruth(int num_frames, int joined, int tolerance)
     anchors[q].push_back(q - joined);
   }
   return GroundTruth(std::move(anchors), tolerance, num_frames, num_frames, true,
-                     "joined stream, frame " + std::to_string(joined) + " + i is frame i, |match - i| <= " +
-                         std::to_string(tolerance));
+                     "joined stream, frame " + std::to_string(joined) +
+                         " + i is frame i, |match - i| <= " + std::to_string(tolerance));
 }
 
 GroundTruth truthMatrixGroundTruth(const cv::Mat& mask, const std::string& origin)

@@ -53,7 +53,8 @@ Columns findColumns(const std::string& header, const std::string& path)
   const std::vector<std::string> names = splitFields(header);
   Columns c;
   c.count = names.size();
-  const auto find = [&](const std::string& name) {
+  const auto find = [&](const std::string& name)
+  {
     const auto it = std::find(names.begin(), names.end(), name);
     return it == names.end() ? -1 : static_cast<int>(it - names.begin());
   };
@@ -139,7 +140,7 @@ LoopDecision parseRow(const std::vector<std::string>& f, const Columns& c, const
 const std::vector<std::string>& loopDecisionStatuses()
 {
   static const std::vector<std::string> kStatuses = {
-      "published",    "too_early",           "excluded",          "above_threshold", "not_unique",
+      "published",    "too_early",           "excluded",     "above_threshold", "not_unique",
       "inconsistent", "failed_verification", "no_candidate",
   };
   return kStatuses;

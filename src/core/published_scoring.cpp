@@ -43,8 +43,7 @@ int positiveFrames(const LoopDecisionTable& table, const GroundTruth& truth, int
     if (d.query >= num_frames)
     {
       throw Error("published scoring: '" + table.path + "' line " + std::to_string(d.line) + ": query " +
-                  std::to_string(d.query) + " is not a frame of the " + std::to_string(num_frames) +
-                  "-frame stream");
+                  std::to_string(d.query) + " is not a frame of the " + std::to_string(num_frames) + "-frame stream");
     }
   }
   int positives = 0;
@@ -134,9 +133,10 @@ EvaluationResult scorePrecisionRecall(const LoopDecisionTable& decisions, const 
 {
   if (!decisions.per_frame)
   {
-    throw Error("published scoring: the score curve needs a decisions.csv (one row per frame, with an 'accepted' "
-                "column), but '" +
-                decisions.path + "' is a loop closures file");
+    throw Error(
+        "published scoring: the score curve needs a decisions.csv (one row per frame, with an 'accepted' "
+        "column), but '" +
+        decisions.path + "' is a loop closures file");
   }
   EvaluationResult result;
   result.positive_queries = positiveFrames(decisions, truth, num_frames);

@@ -106,8 +106,8 @@ TEST(JoinedGroundTruth, FramesBeforeTheJoinNeverMatchAndFrameNPlusIMatchesIWithi
     for (int r = 0; r < 10; ++r)
       EXPECT_FALSE(truth.isMatch(q, r)) << q << " " << r;
   }
-  const std::vector<std::pair<int, int>> expected = {{6, 0}, {6, 1}, {7, 0}, {7, 1}, {7, 2},
-                                                     {8, 1}, {8, 2}, {8, 3}, {9, 2}, {9, 3}, {9, 4}};
+  const std::vector<std::pair<int, int>> expected = {{6, 0}, {6, 1}, {7, 0}, {7, 1}, {7, 2}, {8, 1},
+                                                     {8, 2}, {8, 3}, {9, 2}, {9, 3}, {9, 4}};
   EXPECT_EQ(matches(truth, 10, 10), expected);
   EXPECT_TRUE(truth.exactShape());
   EXPECT_EQ(truth.numQueries(), 10);
@@ -172,8 +172,7 @@ TEST_F(TruthFiles, PngAnyNonZeroChannelIsTheSamePlaceAndAlphaIsIgnored)
   cv::Mat rgba(2, 2, CV_8UC4, cv::Scalar(0, 0, 0, 255));
   rgba.at<cv::Vec4b>(1, 1) = cv::Vec4b(0, 9, 0, 255);
   ASSERT_TRUE(cv::imwrite(path("alpha.png"), rgba));
-  EXPECT_EQ(matches(openable::loadTruthMatrix(path("alpha.png")), 2, 2),
-            (std::vector<std::pair<int, int>>{{1, 1}}));
+  EXPECT_EQ(matches(openable::loadTruthMatrix(path("alpha.png")), 2, 2), (std::vector<std::pair<int, int>>{{1, 1}}));
 
   // 16-bit grey: a value of 1 is not rounded away.
   cv::Mat deep(2, 3, CV_16U, cv::Scalar(0));
@@ -189,18 +188,19 @@ TEST_F(TruthFiles, NpyOfFloatBoolAndInt64NonZeroIsTheSamePlace)
   EXPECT_EQ(matches(openable::loadTruthMatrix(path("float.npy")), 2, 3),
             (std::vector<std::pair<int, int>>{{0, 1}, {1, 0}, {1, 2}}));
 
-  write("bool.npy", npyBytes("{'descr': '|b1', 'fortran_order': False, 'shape': (2, 2), }", std::string("\1\0\0\1", 4)));
+  write("bool.npy",
+        npyBytes("{'descr': '|b1', 'fortran_order': False, 'shape': (2, 2), }", std::string("\1\0\0\1", 4)));
   EXPECT_EQ(matches(openable::loadTruthMatrix(path("bool.npy")), 2, 2),
             (std::vector<std::pair<int, int>>{{0, 0}, {1, 1}}));
 
   // numpy's default integer; 256 has a zero low byte, so every byte must be looked at.
-  write("int.npy", npyBytes("{'descr': '<i8', 'fortran_order': False, 'shape': (1, 3), }",
-                            rawBytes<int64_t>({0, 256, -1})));
+  write("int.npy",
+        npyBytes("{'descr': '<i8', 'fortran_order': False, 'shape': (1, 3), }", rawBytes<int64_t>({0, 256, -1})));
   EXPECT_EQ(matches(openable::loadTruthMatrix(path("int.npy")), 1, 3),
             (std::vector<std::pair<int, int>>{{0, 1}, {0, 2}}));
 
-  write("double.npy", npyBytes("{'descr': '<f8', 'fortran_order': False, 'shape': (1, 2), }",
-                               rawBytes<double>({-0.0, 1e-300})));
+  write("double.npy",
+        npyBytes("{'descr': '<f8', 'fortran_order': False, 'shape': (1, 2), }", rawBytes<double>({-0.0, 1e-300})));
   EXPECT_EQ(matches(openable::loadTruthMatrix(path("double.npy")), 1, 2), (std::vector<std::pair<int, int>>{{0, 1}}));
 }
 
@@ -217,8 +217,7 @@ TEST_F(TruthFiles, ShapeMismatchAndUnreadableFilesAreClearErrors)
   write("text.png", "not an image\n");
   expectError([&] { openable::loadTruthMatrix(path("text.png")); }, "cannot read");
   expectError([&] { openable::loadTruthMatrix(path("missing.npy")); }, "cannot open");
-  write("complex.npy",
-        npyBytes("{'descr': '<c8', 'fortran_order': False, 'shape': (1, 1), }", std::string(8, '\0')));
+  write("complex.npy", npyBytes("{'descr': '<c8', 'fortran_order': False, 'shape': (1, 1), }", std::string(8, '\0')));
   expectError([&] { openable::loadTruthMatrix(path("complex.npy")); }, "dtype '<c8'");
   write("short.npy", npyBytes("{'descr': '|u1', 'fortran_order': False, 'shape': (2, 2), }", std::string(3, '\1')));
   expectError([&] { openable::loadTruthMatrix(path("short.npy")); }, "(truncated)");

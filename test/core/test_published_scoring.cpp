@@ -130,8 +130,7 @@ TEST_F(PublishedFiles, BadFilesAreOneLineErrorsNamingTheLine)
   expectError([&] { openable::loadLoopDecisions(file("none/x.csv", "")); }, "cannot open");
   expectError([&] { load(""); }, "is empty");
   // loop_closures.csv of an openable_offline without scores.
-  expectError([&] { load("query,match,distance\n1,0,0.2\n"); },
-              "has no 'score' column (header 'query,match,distance'");
+  expectError([&] { load("query,match,distance\n1,0,0.2\n"); }, "has no 'score' column (header 'query,match,distance'");
   expectError([&] { load("query,match,distance,score\n1,0,0.2,0.5\n"); }, "has no 'status' column");
   expectError([&] { load("query,match,distance,score,status\n1,0,0.2,0.5,published\n2,0,0.2,published\n"); },
               "line 3 has 4 fields, the header 5");
@@ -209,8 +208,7 @@ TEST_F(PublishedFiles, StreamAndGroundTruthThatDoNotFitAreClearErrors)
               "line 5: query 7 is not a frame of the 7-frame stream");
   expectError([&] { openable::scorePublished(five, openable::joinedGroundTruth(12, 6), 10); },
               "is for 12 frames, but the stream has 10");
-  const openable::GroundTruth empty =
-      openable::truthMatrixGroundTruth(cv::Mat::zeros(10, 10, CV_8U), "of zeros");
+  const openable::GroundTruth empty = openable::truthMatrixGroundTruth(cv::Mat::zeros(10, 10, CV_8U), "of zeros");
   expectError([&] { openable::scorePublished(five, empty, 10); }, "recall is undefined");
   expectError([&] { openable::scorePublished(five, openable::joinedGroundTruth(10, 5), 0); }, "no frames");
 }
@@ -219,9 +217,8 @@ TEST_F(PublishedFiles, ScoreCurveOfEightFramesByHand)
 {
   const openable::EvaluationResult r =
       openable::scorePrecisionRecall(load(kEightDecisions), openable::joinedGroundTruth(8, 4), 8);
-  const std::vector<openable::PrPoint> expected = {{0.95, 1.0, 0.25},      {0.9, 0.5, 0.25}, {0.8, 0.5, 0.5},
-                                                   {0.6, 0.6, 0.75},       {0.5, 0.5, 0.75},
-                                                   {0.2, 3.0 / 7.0, 0.75}};
+  const std::vector<openable::PrPoint> expected = {{0.95, 1.0, 0.25}, {0.9, 0.5, 0.25}, {0.8, 0.5, 0.5},
+                                                   {0.6, 0.6, 0.75},  {0.5, 0.5, 0.75}, {0.2, 3.0 / 7.0, 0.75}};
   ASSERT_EQ(r.curve.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i)
   {
@@ -254,7 +251,8 @@ TEST_F(PublishedFiles, ScoreCurveNeedsOneRowPerFrame)
   const openable::GroundTruth truth = openable::joinedGroundTruth(10, 5);
   expectError([&] { openable::scorePrecisionRecall(load(kFivePublished), truth, 10); }, "needs a decisions.csv");
   expectError(
-      [&] {
+      [&]
+      {
         openable::scorePrecisionRecall(load("query,match,distance,score,status,accepted\n"
                                             "5,0,0.1,0.9,published,1\n"
                                             "5,0,0.1,0.9,published,1\n"),
