@@ -3,7 +3,7 @@
 #include <string>
 
 #include "openable/evaluation.h"
-#include "openable/loop_decisions.h"
+#include "openable/decision_table.h"
 
 namespace openable
 {
@@ -34,14 +34,14 @@ struct PublishedScore
 /// Scores the published rows (status "published") of `table` against `truth` for a stream of `num_frames`
 /// frames. Throws Error when a row's query is not a frame of the stream, when a ground truth of fixed shape
 /// is for another number of frames, or when no frame has a true loop (recall would be undefined).
-PublishedScore scorePublished(const LoopDecisionTable& table, const GroundTruth& truth, int num_frames);
+PublishedScore scorePublished(const DecisionTable& table, const GroundTruth& truth, int num_frames);
 
 /// Precision-recall over the score of every frame's best match, published or not (a decisions.csv): at
 /// threshold s a frame is predicted when score >= s; every distinct score is a threshold, from high to low.
 /// Curve, AUC (step-wise average precision), max recall at 100 % precision and recall@1 as for distance
 /// matrices; a frame without a match or without a finite score has no prediction. Throws Error for a file
 /// that is not per frame (no `accepted` column), a frame listed twice, or the cases of scorePublished.
-EvaluationResult scorePrecisionRecall(const LoopDecisionTable& decisions, const GroundTruth& truth, int num_frames);
+EvaluationResult scorePrecisionRecall(const DecisionTable& decisions, const GroundTruth& truth, int num_frames);
 
 /// The metrics as one line of JSON (no trailing newline): counts, precision and recall of `score`, and when
 /// `curve` is given, its AUC, max recall at 100 % precision and recall@1 as score_*. Undefined values

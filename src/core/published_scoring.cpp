@@ -27,7 +27,7 @@ std::string jsonNumber(double value)
 
 /// Frames with a true loop; checks that every row of `table` is a frame of the stream and that a ground
 /// truth of fixed shape is for this stream.
-int positiveFrames(const LoopDecisionTable& table, const GroundTruth& truth, int num_frames)
+int positiveFrames(const DecisionTable& table, const GroundTruth& truth, int num_frames)
 {
   if (num_frames <= 0)
   {
@@ -38,7 +38,7 @@ int positiveFrames(const LoopDecisionTable& table, const GroundTruth& truth, int
     throw Error("published scoring: the ground truth (" + truth.description() + ") is for " +
                 std::to_string(truth.numQueries()) + " frames, but the stream has " + std::to_string(num_frames));
   }
-  for (const LoopDecision& d : table.rows)
+  for (const DecisionRow& d : table.rows)
   {
     if (d.query >= num_frames)
     {
@@ -60,13 +60,13 @@ int positiveFrames(const LoopDecisionTable& table, const GroundTruth& truth, int
 }
 
 /// Best match per frame, one entry per frame in order (match -1 where the frame has none).
-std::vector<QueryPrediction> framePredictions(const LoopDecisionTable& decisions, const GroundTruth& truth,
+std::vector<QueryPrediction> framePredictions(const DecisionTable& decisions, const GroundTruth& truth,
                                               int num_frames, std::vector<double>& scores)
 {
   std::vector<QueryPrediction> predictions(num_frames);
   std::vector<int> line_of(num_frames, 0);
   scores.assign(num_frames, std::numeric_limits<double>::quiet_NaN());
-  for (const LoopDecision& d : decisions.rows)
+  for (const DecisionRow& d : decisions.rows)
   {
     if (line_of[d.query] != 0)
     {
@@ -106,13 +106,13 @@ double PublishedScore::recall() const
   return positive_frames == 0 ? 0.0 : static_cast<double>(recalled_frames) / static_cast<double>(positive_frames);
 }
 
-PublishedScore scorePublished(const LoopDecisionTable& table, const GroundTruth& truth, int num_frames)
+PublishedScore scorePublished(const DecisionTable& table, const GroundTruth& truth, int num_frames)
 {
   PublishedScore score;
   score.frames = num_frames;
   score.positive_frames = positiveFrames(table, truth, num_frames);
   std::vector<bool> recalled(num_frames, false);
-  for (const LoopDecision& d : table.rows)
+  for (const DecisionRow& d : table.rows)
   {
     if (!d.published())
     {
@@ -129,7 +129,7 @@ PublishedScore scorePublished(const LoopDecisionTable& table, const GroundTruth&
   return score;
 }
 
-EvaluationResult scorePrecisionRecall(const LoopDecisionTable& decisions, const GroundTruth& truth, int num_frames)
+EvaluationResult scorePrecisionRecall(const DecisionTable& decisions, const GroundTruth& truth, int num_frames)
 {
   if (!decisions.per_frame)
   {

@@ -415,13 +415,13 @@ int compareGroundTruth(const Options& o)
 
 /// Frames of the stream for published scoring: --frames, else one past the last frame of the per-frame
 /// decisions, else the ground truth's queries (or one past the last published query if that is more).
-int streamFrames(const Options& o, const openable::LoopDecisionTable& published,
-                 const std::optional<openable::LoopDecisionTable>& decisions, const openable::GroundTruth* truth)
+int streamFrames(const Options& o, const openable::DecisionTable& published,
+                 const std::optional<openable::DecisionTable>& decisions, const openable::GroundTruth* truth)
 {
   if (o.frames > 0)
     return o.frames;
   int last = -1;
-  for (const openable::LoopDecision& d : decisions ? decisions->rows : published.rows)
+  for (const openable::DecisionRow& d : decisions ? decisions->rows : published.rows)
     last = std::max(last, d.query);
   if (decisions || truth == nullptr)
     return last + 1;
@@ -439,10 +439,10 @@ std::string publishedName(const std::string& path)
 int scorePublishedSet(const Options& o)
 {
   fs::create_directories(o.output);
-  const openable::LoopDecisionTable published = openable::loadLoopDecisions(o.published);
-  std::optional<openable::LoopDecisionTable> decisions;
+  const openable::DecisionTable published = openable::loadDecisionTable(o.published);
+  std::optional<openable::DecisionTable> decisions;
   if (!o.decisions.empty())
-    decisions = openable::loadLoopDecisions(o.decisions);
+    decisions = openable::loadDecisionTable(o.decisions);
   else if (published.per_frame)
     decisions = published;
   // Aligned and joined truths are made for a length; the others bring their own.

@@ -10,11 +10,11 @@
 
 #include "openable/error.h"
 #include "openable/ground_truth_sources.h"
-#include "openable/loop_decisions.h"
+#include "openable/decision_table.h"
 #include "openable/published_scoring.h"
 
 namespace fs = std::filesystem;
-using openable::LoopDecisionTable;
+using openable::DecisionTable;
 
 namespace
 {
@@ -38,9 +38,9 @@ protected:
     std::ofstream(p) << text;
     return p;
   }
-  LoopDecisionTable load(const std::string& text) const
+  DecisionTable load(const std::string& text) const
   {
-    return openable::loadLoopDecisions(file("table.csv", text));
+    return openable::loadDecisionTable(file("table.csv", text));
   }
   fs::path dir_;
 };
@@ -89,7 +89,7 @@ const char kEightDecisions[] =
 
 TEST_F(PublishedFiles, LoopClosuresWithPanoramicColumnsInAnyOrder)
 {
-  const LoopDecisionTable t = load(
+  const DecisionTable t = load(
       "query,match,distance,score,status,direction,shift\n"
       "12, 3, 0.25, 0.75, published, -1, 4\n"
       "\n"
@@ -105,7 +105,7 @@ TEST_F(PublishedFiles, LoopClosuresWithPanoramicColumnsInAnyOrder)
   EXPECT_EQ(t.rows[1].line, 4);
   EXPECT_DOUBLE_EQ(t.rows[1].score, 1e-3);
 
-  const LoopDecisionTable swapped = load("status,score,distance,match,query\npublished,0.5,0.2,1,9\n");
+  const DecisionTable swapped = load("status,score,distance,match,query\npublished,0.5,0.2,1,9\n");
   ASSERT_EQ(swapped.rows.size(), 1u);
   EXPECT_EQ(swapped.rows[0].query, 9);
   EXPECT_EQ(swapped.rows[0].match, 1);
@@ -113,7 +113,7 @@ TEST_F(PublishedFiles, LoopClosuresWithPanoramicColumnsInAnyOrder)
 
 TEST_F(PublishedFiles, DecisionsWithoutCandidateAndAcceptedFlags)
 {
-  const LoopDecisionTable t = load(kEightDecisions);
+  const DecisionTable t = load(kEightDecisions);
   EXPECT_TRUE(t.per_frame);
   ASSERT_EQ(t.rows.size(), 8u);
   EXPECT_EQ(t.rows[0].match, -1);
@@ -127,7 +127,7 @@ TEST_F(PublishedFiles, DecisionsWithoutCandidateAndAcceptedFlags)
 
 TEST_F(PublishedFiles, BadFilesAreOneLineErrorsNamingTheLine)
 {
-  expectError([&] { openable::loadLoopDecisions(file("none/x.csv", "")); }, "cannot open");
+  expectError([&] { openable::loadDecisionTable(file("none/x.csv", "")); }, "cannot open");
   expectError([&] { load(""); }, "is empty");
   // loop_closures.csv of an openable_offline without scores.
   expectError([&] { load("query,match,distance\n1,0,0.2\n"); }, "has no 'score' column (header 'query,match,distance'");
@@ -203,7 +203,7 @@ TEST_F(PublishedFiles, NothingPublishedHasNoPrecisionAndJsonSaysNull)
 
 TEST_F(PublishedFiles, StreamAndGroundTruthThatDoNotFitAreClearErrors)
 {
-  const LoopDecisionTable five = load(kFivePublished);
+  const DecisionTable five = load(kFivePublished);
   expectError([&] { openable::scorePublished(five, openable::joinedGroundTruth(7, 3), 7); },
               "line 5: query 7 is not a frame of the 7-frame stream");
   expectError([&] { openable::scorePublished(five, openable::joinedGroundTruth(12, 6), 10); },

@@ -1,6 +1,6 @@
 // Reader of openable_offline's loop_closures.csv and decisions.csv, strict so that a file from another
 // version of the tool fails loudly instead of being scored wrongly.
-#include "openable/loop_decisions.h"
+#include "openable/decision_table.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -102,9 +102,9 @@ double parseNumber(const std::string& text, const std::string& what, const std::
   return value;
 }
 
-LoopDecision parseRow(const std::vector<std::string>& f, const Columns& c, const std::string& where)
+DecisionRow parseRow(const std::vector<std::string>& f, const Columns& c, const std::string& where)
 {
-  LoopDecision d;
+  DecisionRow d;
   d.query = parseIndex(f[c.query], 0, "query", where);
   d.match = parseIndex(f[c.match], -1, "match", where);
   d.distance = parseNumber(f[c.distance], "distance", where);
@@ -146,14 +146,14 @@ const std::vector<std::string>& loopDecisionStatuses()
   return kStatuses;
 }
 
-LoopDecisionTable loadLoopDecisions(const std::string& path)
+DecisionTable loadDecisionTable(const std::string& path)
 {
   std::ifstream in(path);
   if (!in)
   {
     throw Error("loop decisions: cannot open '" + path + "' (missing or unreadable)");
   }
-  LoopDecisionTable table;
+  DecisionTable table;
   table.path = path;
   std::string line;
   if (!std::getline(in, line) || trimmed(line).empty())
@@ -175,7 +175,7 @@ LoopDecisionTable loadLoopDecisions(const std::string& path)
       throw Error(where + " has " + std::to_string(fields.size()) + " fields, the header " +
                   std::to_string(columns.count));
     }
-    LoopDecision d = parseRow(fields, columns, where);
+    DecisionRow d = parseRow(fields, columns, where);
     d.line = number;
     if (!table.per_frame && !d.published())
     {

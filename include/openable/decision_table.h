@@ -7,7 +7,7 @@ namespace openable
 {
 /// What the loop-closure detector decided for one frame: a row of openable_offline's decisions.csv (one per
 /// frame) or loop_closures.csv (one per published loop closure).
-struct LoopDecision
+struct DecisionRow
 {
   /// 0-based frame index of the stream (the query row of distance_matrix.npy).
   int query = -1;
@@ -31,10 +31,10 @@ struct LoopDecision
 };
 
 /// The rows of one file, and whether it is a per-frame decisions file (it has an `accepted` column).
-struct LoopDecisionTable
+struct DecisionTable
 {
   std::string path;
-  std::vector<LoopDecision> rows;
+  std::vector<DecisionRow> rows;
   bool per_frame = false;
 };
 
@@ -47,6 +47,6 @@ const std::vector<std::string>& loopDecisionStatuses();
 /// file, a missing column, a row with the wrong number of fields, a bad number, a status not in
 /// loopDecisionStatuses(), accepted not 0/1, a published row without a match, or a loop_closures.csv row
 /// that is not published.
-LoopDecisionTable loadLoopDecisions(const std::string& path);
+DecisionTable loadDecisionTable(const std::string& path);
 
 }  // namespace openable
