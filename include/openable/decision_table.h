@@ -17,7 +17,7 @@ struct DecisionRow
   double distance = 0.0;
   /// Higher = surer; NaN when the frame had no candidate.
   double score = 0.0;
-  /// One of loopDecisionStatuses().
+  /// The word of a FrameStatus (loop_decision.h), e.g. "published", "not_unique".
   std::string status;
   /// The `accepted` column of decisions.csv (false in loop_closures.csv, which has none).
   bool accepted = false;
@@ -38,14 +38,11 @@ struct DecisionTable
   bool per_frame = false;
 };
 
-/// Every status openable_offline writes; "published" is the one that means "published as a loop closure".
-const std::vector<std::string>& loopDecisionStatuses();
-
 /// Reads loop_closures.csv (`query,match,distance,score,status`, maybe more columns such as `direction,shift`)
 /// or decisions.csv (the same plus `accepted`). Columns are found by name in the header, so their order and
 /// extra columns do not matter. Throws Error naming the file, and the line where one is at fault: missing
-/// file, a missing column, a row with the wrong number of fields, a bad number, a status not in
-/// loopDecisionStatuses(), accepted not 0/1, a published row without a match, or a loop_closures.csv row
+/// file, a missing column, a row with the wrong number of fields, a bad number, a status that is no
+/// FrameStatus word, accepted not 0/1, a published row without a match, or a loop_closures.csv row
 /// that is not published.
 DecisionTable loadDecisionTable(const std::string& path);
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "openable/error.h"
+#include "openable/loop_decision.h"
 
 namespace openable
 {
@@ -79,6 +80,32 @@ Columns findColumns(const std::string& header, const std::string& path)
   return c;
 }
 
+// FrameStatus is the one list of statuses: the words openable_offline writes come from toString.
+// (Unverified must stay the last enumerator, and they must count from 0.)
+constexpr int kLastStatus = static_cast<int>(FrameStatus::Unverified);
+
+bool isStatusWord(const std::string& word)
+{
+  for (int s = 0; s <= kLastStatus; ++s)
+  {
+    if (word == toString(static_cast<FrameStatus>(s)))
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string statusWords()
+{
+  std::string list;
+  for (int s = 0; s <= kLastStatus; ++s)
+  {
+    list += (s == 0 ? "" : ", ") + std::string(toString(static_cast<FrameStatus>(s)));
+  }
+  return list;
+}
+
 int parseIndex(const std::string& text, int minimum, const std::string& what, const std::string& where)
 {
   errno = 0;
@@ -110,15 +137,9 @@ DecisionRow parseRow(const std::vector<std::string>& f, const Columns& c, const 
   d.distance = parseNumber(f[c.distance], "distance", where);
   d.score = parseNumber(f[c.score], "score", where);
   d.status = f[c.status];
-  const std::vector<std::string>& known = loopDecisionStatuses();
-  if (std::find(known.begin(), known.end(), d.status) == known.end())
+  if (!isStatusWord(d.status))
   {
-    std::string list;
-    for (const std::string& s : known)
-    {
-      list += (list.empty() ? "" : ", ") + s;
-    }
-    throw Error(where + ": unknown status '" + d.status + "' (known: " + list + ")");
+    throw Error(where + ": unknown status '" + d.status + "' (known: " + statusWords() + ")");
   }
   if (c.accepted >= 0)
   {
@@ -136,15 +157,6 @@ DecisionRow parseRow(const std::vector<std::string>& f, const Columns& c, const 
 }
 
 }  // namespace
-
-const std::vector<std::string>& loopDecisionStatuses()
-{
-  static const std::vector<std::string> kStatuses = {
-      "published",    "too_early",           "excluded",     "above_threshold", "not_unique",
-      "inconsistent", "failed_verification", "no_candidate",
-  };
-  return kStatuses;
-}
 
 DecisionTable loadDecisionTable(const std::string& path)
 {
