@@ -184,6 +184,8 @@ void saveQueryMask(const std::string& path, const std::vector<bool>& mask);
 std::string prCurveCsv(const EvaluationResult& result);
 /// The metrics as one line of JSON (no trailing newline); `name` labels the run.
 std::string metricsJson(const EvaluationResult& result, const std::string& name, const std::string& ground_truth);
+/// `text` as a JSON string literal: quoted, with quotes, backslashes and control characters escaped.
+std::string jsonString(const std::string& text);
 
 /// One curve of a PR plot.
 struct PrPlotSeries

@@ -13,4 +13,9 @@ void writeNpy(const std::string& path, const cv::Mat& matrix);
 /// Throws Error naming what is wrong (missing, not .npy, unsupported dtype / order / rank, truncated).
 cv::Mat readNpy(const std::string& path);
 
+/// Reads a 2-D .npy of bool, integer (any width, little-endian) or float32/float64 (C order) as a CV_8U
+/// mask: 255 where the cell is non-zero (NaN counts as non-zero, -0.0 as zero), 0 elsewhere. For masks such
+/// as ground-truth matrices, which numpy saves as bool or int64. Throws Error like readNpy.
+cv::Mat readNpyNonZero(const std::string& path);
+
 }  // namespace openable

@@ -592,6 +592,11 @@ std::string metricsJson(const EvaluationResult& result, const std::string& name,
   return out.str();
 }
 
+std::string jsonString(const std::string& text)
+{
+  return "\"" + jsonEscape(text) + "\"";
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Plot
 

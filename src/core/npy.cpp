@@ -180,13 +180,9 @@ NpyHeader parseHeader(const std::string& bytes, const std::string& path)
   return header;
 }
 
-void checkSupported(const NpyHeader& header, const std::string& path)
+/// C order, two dimensions, each below 2^31 (what a cv::Mat can hold).
+void checkLayout(const NpyHeader& header, const std::string& path)
 {
-  if (header.descr != "'<f4'" && header.descr != "'<f8'")
-  {
-    throw Error("npy: '" + path + "' has dtype " + header.descr +
-                "; only little-endian float32 '<f4' and float64 '<f8' are supported");
-  }
   if (header.fortran_order)
   {
     throw Error("npy: '" + path + "' is in Fortran order; save it in C order (numpy.ascontiguousarray)");
@@ -200,6 +196,59 @@ void checkSupported(const NpyHeader& header, const std::string& path)
   {
     throw Error("npy: '" + path + "' has a shape too large for a matrix");
   }
+}
+
+void checkSupported(const NpyHeader& header, const std::string& path)
+{
+  if (header.descr != "'<f4'" && header.descr != "'<f8'")
+  {
+    throw Error("npy: '" + path + "' has dtype " + header.descr +
+                "; only little-endian float32 '<f4' and float64 '<f8' are supported");
+  }
+  checkLayout(header, path);
+}
+
+/// The data of a checked header as a rows x `raw_cols` matrix of `type` (`item` bytes per cell). The file
+/// must hold exactly that many bytes, checked before allocating: a corrupt shape cannot ask for terabytes.
+cv::Mat readData(std::ifstream& in, const NpyHeader& header, uint64_t file_size, size_t item, const std::string& path,
+                 int type, int raw_cols)
+{
+  const int rows = static_cast<int>(header.shape[0]);
+  const int cols = static_cast<int>(header.shape[1]);
+  // Dims are < 2^31 each, so the product of three factors (<= 2^67) is formed in two checked steps.
+  const uint64_t available = file_size - header.data_offset;
+  const uint64_t cells = header.shape[0] * header.shape[1];
+  const bool overflows = cells > UINT64_MAX / item;
+  const uint64_t expected = overflows ? UINT64_MAX : cells * item;
+  if (available != expected)
+  {
+    throw Error("npy: '" + path + "' holds " + std::to_string(available) + " data bytes but its shape (" +
+                std::to_string(rows) + ", " + std::to_string(cols) + ") needs " +
+                (overflows ? std::string("more than 2^64") : std::to_string(expected)) +
+                (available < expected ? " (truncated)" : " (trailing garbage)"));
+  }
+  cv::Mat raw(rows, raw_cols, type);
+  in.seekg(static_cast<std::streamoff>(header.data_offset));
+  if (expected > 0 && !in.read(reinterpret_cast<char*>(raw.data), static_cast<std::streamsize>(expected)))
+  {
+    throw Error("npy: cannot read the data of '" + path + "'");
+  }
+  return raw;
+}
+
+/// Item size of the dtypes readNpyNonZero takes (bool, integers, floats; little-endian or single byte),
+/// 0 for any other. '<' and '|' are both fine for one-byte types: numpy writes '|'.
+size_t nonZeroItemSize(const std::string& descr)
+{
+  if (descr.size() != 5 || descr.front() != '\'' || descr.back() != '\'')
+  {
+    return 0;
+  }
+  const char order = descr[1], kind = descr[2], width = descr[3];
+  const bool one_byte = width == '1' && (order == '|' || order == '<') && (kind == 'b' || kind == 'u' || kind == 'i');
+  const bool integer = order == '<' && (kind == 'u' || kind == 'i') && (width == '2' || width == '4' || width == '8');
+  const bool floating = order == '<' && kind == 'f' && (width == '4' || width == '8');
+  return (one_byte || integer || floating) ? static_cast<size_t>(width - '0') : 0;
 }
 
 std::string makeHeader(int rows, int cols)
@@ -258,28 +307,9 @@ cv::Mat readNpy(const std::string& path)
   std::ifstream in = openWithHead(path, file_size, head);
   const NpyHeader header = parseHeader(head, path);
   checkSupported(header, path);
-  const int rows = static_cast<int>(header.shape[0]);
-  const int cols = static_cast<int>(header.shape[1]);
   const size_t item = header.descr == "'<f4'" ? 4 : 8;
-  // Checked against the file size before allocating, so a corrupt shape cannot ask for terabytes.
-  // Dims are < 2^31 each, so the product of three factors (<= 2^65) is formed in two checked steps.
-  const uint64_t available = file_size - header.data_offset;
-  const uint64_t cells = header.shape[0] * header.shape[1];
-  const bool overflows = cells > UINT64_MAX / item;
-  const uint64_t expected = overflows ? UINT64_MAX : cells * item;
-  if (available != expected)
-  {
-    throw Error("npy: '" + path + "' holds " + std::to_string(available) + " data bytes but its shape (" +
-                std::to_string(rows) + ", " + std::to_string(cols) + ") needs " +
-                (overflows ? std::string("more than 2^64") : std::to_string(expected)) +
-                (available < expected ? " (truncated)" : " (trailing garbage)"));
-  }
-  cv::Mat raw(rows, cols, item == 4 ? CV_32F : CV_64F);
-  in.seekg(static_cast<std::streamoff>(header.data_offset));
-  if (expected > 0 && !in.read(reinterpret_cast<char*>(raw.data), static_cast<std::streamsize>(expected)))
-  {
-    throw Error("npy: cannot read the data of '" + path + "'");
-  }
+  const cv::Mat raw =
+      readData(in, header, file_size, item, path, item == 4 ? CV_32F : CV_64F, static_cast<int>(header.shape[1]));
   if (item == 4)
   {
     return raw;
@@ -287,6 +317,62 @@ cv::Mat readNpy(const std::string& path)
   cv::Mat matrix;
   raw.convertTo(matrix, CV_32F);
   return matrix;
+}
+
+cv::Mat readNpyNonZero(const std::string& path)
+{
+  if (!isLittleEndianHost())
+  {
+    throw Error("npy: reading little-endian data on a big-endian host is not supported");
+  }
+  uint64_t file_size = 0;
+  std::string head;
+  std::ifstream in = openWithHead(path, file_size, head);
+  const NpyHeader header = parseHeader(head, path);
+  const size_t item = nonZeroItemSize(header.descr);
+  if (item == 0)
+  {
+    throw Error("npy: '" + path + "' has dtype " + header.descr +
+                "; expected bool, a little-endian integer or float32/float64");
+  }
+  checkLayout(header, path);
+  const int rows = static_cast<int>(header.shape[0]);
+  const int cols = static_cast<int>(header.shape[1]);
+  if (static_cast<uint64_t>(cols) * item > static_cast<uint64_t>(INT32_MAX))
+  {
+    throw Error("npy: '" + path + "' has rows too long for a matrix");
+  }
+  const cv::Mat raw = readData(in, header, file_size, item, path, CV_8U, static_cast<int>(cols * item));
+  const bool floating = header.descr[2] == 'f';
+  cv::Mat non_zero(rows, cols, CV_8U);
+  for (int r = 0; r < rows; ++r)
+  {
+    const unsigned char* bytes = raw.ptr<unsigned char>(r);
+    unsigned char* out = non_zero.ptr<unsigned char>(r);
+    for (int c = 0; c < cols; ++c, bytes += item)
+    {
+      bool set = false;
+      if (floating && item == 4)
+      {
+        float value = 0.0F;
+        std::memcpy(&value, bytes, 4);
+        set = value != 0.0F;  // -0.0 is zero, NaN is not (numpy.nonzero agrees)
+      }
+      else if (floating)
+      {
+        double value = 0.0;
+        std::memcpy(&value, bytes, 8);
+        set = value != 0.0;
+      }
+      else
+      {
+        // An integer or bool is zero exactly when all its bytes are, whatever the byte order.
+        set = std::any_of(bytes, bytes + item, [](unsigned char b) { return b != 0; });
+      }
+      out[c] = set ? 255 : 0;
+    }
+  }
+  return non_zero;
 }
 
 }  // namespace openable

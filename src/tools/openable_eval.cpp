@@ -1,10 +1,12 @@
 // openable_eval: precision-recall of distance matrices against a ground truth (see --help).
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -12,8 +14,10 @@
 
 #include "openable/error.h"
 #include "openable/evaluation.h"
+#include "openable/ground_truth_sources.h"
 #include "openable/image_source.h"
 #include "openable/npy.h"
+#include "openable/published_scoring.h"
 
 namespace
 {
@@ -24,8 +28,10 @@ const char kUsage[] = R"(openable_eval: precision-recall of OpenABLE distance ma
 Usage:
   openable_eval --matrix PATH [--name LABEL] [--matrix PATH --name LABEL ...]
                 [--mask FILE | --mask-dark IMAGES]
-                (--tolerance T | --pairs FILE [--pair-tolerance K] | --poses FILE [--distance D] [--exclusion E])
+                (--tolerance T | --pairs FILE [--pair-tolerance K] | --poses FILE [--distance D] [--exclusion E]
+                 | --joined N [--tolerance T] | --truth-matrix PATH)
                 --output DIR [--title TEXT]
+  openable_eval --published FILE [--decisions FILE] [--frames M] (ground truth as above) --output DIR
   openable_eval --poses FILE --compare FILE [--distance D] [--exclusion E] [--sweep]
 
 Distance matrix:
@@ -52,6 +58,11 @@ Ground truth (exactly one):
   --distance D         with --poses: metres (default 6).
   --exclusion E        with --poses: frames (default 100). The defaults reproduce the published ground
                        truth of KITTI 00, 05 and 06 best (doc/results.md).
+  --joined N           one stream of two traversals joined at frame N (loop-closure mode): frame N + i is the
+                       place of frame i and matches frames within --tolerance T of i (default 0); frames
+                       before N have no loop, so any match accepted there is a false positive.
+  --truth-matrix PATH  PNG (any non-zero pixel = same place) or .npy (bool, integer or float; non-zero = same
+                       place), rows = queries, columns = references; its shape must be the distance matrix's.
 
 Output:
   --output DIR         created if missing; receives pr_curve.csv (threshold,precision,recall; with several
@@ -66,6 +77,24 @@ with several matrices), then the metrics as one line of JSON.
   recall_at_1          fraction of queries with a true match whose best match is a true match.
 A query's prediction is its row's smallest distance; at threshold t it is accepted when distance <= t and
 is a true positive when its column is a true match; every distinct distance is a threshold.
+
+Published loop closures (instead of --matrix):
+  --published FILE     loop_closures.csv (query,match,distance,score,status[,direction,shift]) or
+                       decisions.csv (the same plus accepted, one row per frame) of openable_offline; the rows
+                       with status 'published' are scored. Prints published, wrong (published rows whose
+                       match is not a true match), precision (correct / published rows) and recall (frames
+                       with a true loop that got a correct published match / frames with a true loop; a
+                       frame published twice counts once), then the metrics as one line of JSON, also
+                       written to DIR/metrics.json.
+  --decisions FILE     decisions.csv: every frame's best match, published or not, gives a PR curve over its
+                       score (a frame is predicted when score >= s, s from high to low), written to
+                       DIR/published_pr.csv (threshold = score) and DIR/published_pr.png, and score_auc,
+                       score_max_recall_at_100_precision, score_recall_at_1. Without it, a decisions.csv
+                       given to --published serves.
+  --frames M           frames in the stream (default: from the decisions, or the ground truth's shape);
+                       --joined and --tolerance need it or a decisions.csv.
+  --tolerance alone means aligned traversals (query i matches reference j when |i - j| <= T): only sensible
+  for the decisions of a localisation run.
 
 Ground-truth comparison:
   --compare FILE       with --poses: compare the loops from the poses with a pairs file (pair precision,
@@ -87,6 +116,11 @@ struct Options
   std::string mask;
   std::string mask_dark;
   int tolerance = -1;
+  int joined = -1;
+  std::string truth_matrix;
+  std::string published;
+  std::string decisions;
+  int frames = 0;
   std::string pairs;
   int pair_tolerance = 0;
   std::string poses;
@@ -171,6 +205,16 @@ Options parseArguments(int argc, char** argv)
       o.tolerance = parseInt(flag, takeValue(argc, argv, i));
     else if (flag == "--pairs")
       o.pairs = takeValue(argc, argv, i);
+    else if (flag == "--joined")
+      o.joined = parseInt(flag, takeValue(argc, argv, i));
+    else if (flag == "--truth-matrix")
+      o.truth_matrix = takeValue(argc, argv, i);
+    else if (flag == "--published")
+      o.published = takeValue(argc, argv, i);
+    else if (flag == "--decisions")
+      o.decisions = takeValue(argc, argv, i);
+    else if (flag == "--frames")
+      o.frames = parseInt(flag, takeValue(argc, argv, i));
     else if (flag == "--pair-tolerance")
       o.pair_tolerance = parseInt(flag, takeValue(argc, argv, i));
     else if (flag == "--poses")
@@ -195,7 +239,13 @@ Options parseArguments(int argc, char** argv)
 
 void checkOptions(const Options& o)
 {
-  const int sources = (o.tolerance >= 0 ? 1 : 0) + (o.pairs.empty() ? 0 : 1) + (o.poses.empty() ? 0 : 1);
+  // With --joined, --tolerance is the joined truth's tolerance, not a ground truth of its own.
+  const int sources = (o.tolerance >= 0 || o.joined >= 0 ? 1 : 0) + (o.pairs.empty() ? 0 : 1) +
+                      (o.poses.empty() ? 0 : 1) + (o.truth_matrix.empty() ? 0 : 1);
+  if (o.published.empty() && (!o.decisions.empty() || o.frames > 0))
+    throw UsageError("--decisions and --frames need --published");
+  if (!o.published.empty() && (!o.compare.empty() || o.sweep))
+    throw UsageError("--published does not go with --compare or --sweep");
   if (!o.compare.empty())
   {
     if (o.poses.empty() || !o.matrices.empty() || sources != 1)
@@ -204,10 +254,15 @@ void checkOptions(const Options& o)
   }
   if (o.sweep)
     throw UsageError("--sweep needs --poses and --compare");
-  if (o.matrices.empty())
+  if (!o.published.empty())
+  {
+    if (!o.matrices.empty() || !o.mask.empty() || !o.mask_dark.empty())
+      throw UsageError("--published scores a loop closures file: no --matrix, --mask or --mask-dark with it");
+  }
+  else if (o.matrices.empty())
     throw UsageError("no --matrix given (see --help)");
   if (sources != 1)
-    throw UsageError("give exactly one ground truth: --tolerance, --pairs or --poses");
+    throw UsageError("give exactly one ground truth: --tolerance, --pairs, --poses, --joined or --truth-matrix");
   if (o.output.empty())
     throw UsageError("no --output folder given");
   if (!o.mask.empty() && !o.mask_dark.empty())
@@ -243,10 +298,20 @@ std::string fileSafe(const std::string& name)
   return safe;
 }
 
-openable::GroundTruth makeGroundTruth(const Options& o, const cv::Mat& matrix)
+/// The ground truth of the options for a `rows` x `cols` matrix (the shape matters to aligned and joined).
+openable::GroundTruth makeGroundTruth(const Options& o, int rows, int cols)
 {
+  if (o.joined >= 0)
+  {
+    if (rows != cols)
+      throw openable::Error("--joined: a joined stream is matched against itself, but the matrix is " +
+                            std::to_string(rows) + "x" + std::to_string(cols));
+    return openable::joinedGroundTruth(rows, o.joined, std::max(o.tolerance, 0));
+  }
+  if (!o.truth_matrix.empty())
+    return openable::loadTruthMatrix(o.truth_matrix);
   if (o.tolerance >= 0)
-    return openable::alignedGroundTruth(matrix.rows, matrix.cols, o.tolerance);
+    return openable::alignedGroundTruth(rows, cols, o.tolerance);
   if (!o.pairs.empty())
     return openable::loadPairsGroundTruth(o.pairs, o.pair_tolerance);
   return openable::posesGroundTruth(openable::loadKittiPositions(o.poses), o.distance, o.exclusion);
@@ -282,7 +347,7 @@ int evaluate(const Options& o)
   for (size_t i = 0; i < o.matrices.size(); ++i)
   {
     const cv::Mat matrix = openable::readNpy(matrixFile(o.matrices[i]));
-    const openable::GroundTruth truth = makeGroundTruth(o, matrix);
+    const openable::GroundTruth truth = makeGroundTruth(o, matrix.rows, matrix.cols);
     const std::string name = i < o.names.size() ? o.names[i] : defaultName(o.matrices[i]);
     openable::EvaluationResult result = openable::evaluatePrecisionRecall(matrix, truth, mask);
     const std::string csv_name = several ? "pr_curve_" + fileSafe(name) + ".csv" : "pr_curve.csv";
@@ -348,6 +413,76 @@ int compareGroundTruth(const Options& o)
   return 0;
 }
 
+/// Frames of the stream for published scoring: --frames, else one past the last frame of the per-frame
+/// decisions, else the ground truth's queries (or one past the last published query if that is more).
+int streamFrames(const Options& o, const openable::DecisionTable& published,
+                 const std::optional<openable::DecisionTable>& decisions, const openable::GroundTruth* truth)
+{
+  if (o.frames > 0)
+    return o.frames;
+  int last = -1;
+  for (const openable::DecisionRow& d : decisions ? decisions->rows : published.rows)
+    last = std::max(last, d.query);
+  if (decisions || truth == nullptr)
+    return last + 1;
+  return truth->exactShape() ? truth->numQueries() : std::max(truth->numQueries(), last + 1);
+}
+
+/// The run's label: the folder openable_offline wrote the file into, or the file's name without one.
+std::string publishedName(const std::string& path)
+{
+  const fs::path folder = fs::path(path).lexically_normal().parent_path();
+  return folder.has_filename() ? folder.filename().string() : fs::path(path).stem().string();
+}
+
+/// Published loop closures (and, with decisions, the score curve) of one stream against a ground truth.
+int scorePublishedSet(const Options& o)
+{
+  fs::create_directories(o.output);
+  const openable::DecisionTable published = openable::loadDecisionTable(o.published);
+  std::optional<openable::DecisionTable> decisions;
+  if (!o.decisions.empty())
+    decisions = openable::loadDecisionTable(o.decisions);
+  else if (published.per_frame)
+    decisions = published;
+  // Aligned and joined truths are made for a length; the others bring their own.
+  const bool needs_length =
+      o.joined >= 0 || (o.tolerance >= 0 && o.pairs.empty() && o.poses.empty() && o.truth_matrix.empty());
+  int frames = 0;
+  if (needs_length)
+  {
+    if (o.frames == 0 && !decisions)
+      throw openable::Error("--joined and --tolerance need the stream's length: give --frames M or a decisions.csv");
+    frames = streamFrames(o, published, decisions, nullptr);
+  }
+  const openable::GroundTruth truth = makeGroundTruth(o, frames, frames);
+  frames = needs_length ? frames : streamFrames(o, published, decisions, &truth);
+  const openable::PublishedScore score = openable::scorePublished(published, truth, frames);
+  std::optional<openable::EvaluationResult> curve;
+  if (decisions)
+  {
+    curve = openable::scorePrecisionRecall(*decisions, truth, frames);
+    openable::writeFileAtomically((fs::path(o.output) / "published_pr.csv").string(), openable::prCurveCsv(*curve));
+    std::vector<unsigned char> png;
+    cv::imencode(".png", openable::drawPrCurves({{"score", *curve}}, o.title), png);
+    openable::writeFileAtomically((fs::path(o.output) / "published_pr.png").string(),
+                                  std::string(png.begin(), png.end()));
+  }
+  const std::string json =
+      openable::publishedMetricsJson(score, curve ? &*curve : nullptr, publishedName(o.published), truth.description());
+  openable::writeFileAtomically((fs::path(o.output) / "metrics.json").string(), json + "\n");
+  std::cout << "published: " << score.published << "\n"
+            << "wrong: " << score.wrong() << "\n"
+            << "precision: " << score.precision() << "\n"
+            << "recall: " << score.recall() << "\n";
+  if (curve)
+    std::cout << "score_auc: " << curve->auc << "\n"
+              << "score_max_recall_at_100_precision: " << curve->max_recall_at_100_precision << "\n"
+              << "score_recall_at_1: " << curve->recall_at_1 << "\n";
+  std::cout << json << std::endl;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -370,6 +505,8 @@ int main(int argc, char** argv)
   }
   try
   {
+    if (!options.published.empty())
+      return scorePublishedSet(options);
     return options.compare.empty() ? evaluate(options) : compareGroundTruth(options);
   }
   catch (const std::exception& e)

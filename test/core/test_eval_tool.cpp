@@ -168,6 +168,143 @@ TEST_F(EvalToolTest, OverlaysSeveralMatrices)
   EXPECT_EQ(cv::imread(path("out/pr_curve.png")).size(), cv::Size(800, 600));
 }
 
+TEST_F(EvalToolTest, JoinedStreamMakesAcceptancesBeforeTheJoinFalsePositives)
+{
+  // The four-by-four as one stream joined at 2: rows 0 and 1 have no loop, 2 -> 0 and 3 -> 1 are the truth.
+  // Best matches: q0 -> 0 (0.1, false positive), q1 -> 0 (0.2, false positive), q2 -> 2 (0.3, wrong),
+  // q3 -> 1 (0.4, right): one true positive, at the last threshold.
+  const ToolRun r = run("--matrix '" + path("m.npy") + "' --joined 2 --output '" + path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> printed = lines(r.out);
+  ASSERT_EQ(printed.size(), 4u) << r.out;
+  EXPECT_EQ(printed[0], "auc: 0.125");
+  EXPECT_EQ(printed[1], "max_recall_at_100_precision: 0");
+  EXPECT_EQ(printed[2], "recall_at_1: 0.5");
+  EXPECT_NE(printed[3].find("\"ground_truth\": \"joined stream, frame 2 + i is frame i, |match - i| <= 0\""),
+            std::string::npos);
+  // --tolerance is the joined truth's tolerance: 2 -> 2 is within 2 of 0.
+  const ToolRun tolerant =
+      run("--matrix '" + path("m.npy") + "' --joined 2 --tolerance 2 --output '" + path("out") + "'");
+  ASSERT_EQ(tolerant.status, 0) << tolerant.err;
+  EXPECT_EQ(lines(tolerant.out)[2], "recall_at_1: 1");
+}
+
+TEST_F(EvalToolTest, TruthMatrixPngMustHaveTheMatrixShape)
+{
+  cv::Mat truth(4, 4, CV_8U, cv::Scalar(0));
+  truth.diag().setTo(255);
+  ASSERT_TRUE(cv::imwrite(path("truth.png"), truth));
+  ToolRun r = run("--matrix '" + path("m.npy") + "' --truth-matrix '" + path("truth.png") + "' --output '" +
+                  path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(lines(r.out)[0], "auc: 0.416667");  // the diagonal is the aligned truth with tolerance 0
+
+  ASSERT_TRUE(cv::imwrite(path("wide.png"), cv::Mat(4, 5, CV_8U, cv::Scalar(255))));
+  r = run("--matrix '" + path("m.npy") + "' --truth-matrix '" + path("wide.png") + "' --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("is for a 4x5 matrix, but the distance matrix is 4x4"), std::string::npos) << r.err;
+}
+
+TEST_F(EvalToolTest, ScoresPublishedLoopClosuresAndTheScoreCurveOfAJoinedStream)
+{
+  // Eight frames joined at 4 (see test_published_scoring.cpp): three published, all right, recall 3/4;
+  // over the score, AUC 0.525.
+  std::ofstream(path("loop_closures.csv")) << "query,match,distance,score,status\n"
+                                              "4,0,0.1,0.95,published\n5,1,0.1,0.8,published\n"
+                                              "7,3,0.1,0.6,published\n";
+  std::ofstream(path("decisions.csv")) << "query,match,distance,score,status,accepted\n"
+                                          "0,-1,nan,nan,too_early,0\n1,0,0.5,0.2,not_unique,0\n"
+                                          "2,0,0.4,0.9,inconsistent,1\n3,1,0.3,0.5,above_threshold,0\n"
+                                          "4,0,0.1,0.95,published,1\n5,1,0.1,0.8,published,1\n"
+                                          "6,0,0.2,0.8,not_unique,0\n7,3,0.1,0.6,published,1\n";
+  const ToolRun r = run("--published '" + path("loop_closures.csv") + "' --decisions '" + path("decisions.csv") +
+                        "' --joined 4 --output '" + path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> printed = lines(r.out);
+  ASSERT_EQ(printed.size(), 8u) << r.out;
+  EXPECT_EQ(printed[0], "published: 3");
+  EXPECT_EQ(printed[1], "wrong: 0");
+  EXPECT_EQ(printed[2], "precision: 1");
+  EXPECT_EQ(printed[3], "recall: 0.75");
+  EXPECT_EQ(printed[4], "score_auc: 0.525");
+  EXPECT_EQ(printed[5], "score_max_recall_at_100_precision: 0.25");
+  EXPECT_EQ(printed[6], "score_recall_at_1: 0.75");
+  EXPECT_EQ(printed[7].rfind("{\"name\": \"openable_test_eval_tool_", 0), 0u) << printed[7];
+  EXPECT_NE(printed[7].find("\"published\": 3, \"correct\": 3, \"wrong\": 0, \"precision\": 1, \"recall\": 0.75"),
+            std::string::npos);
+  EXPECT_EQ(readText(path("out/metrics.json")), printed[7] + "\n");
+  EXPECT_EQ(readText(path("out/published_pr.csv")),
+            "threshold,precision,recall\n0.95,1,0.25\n0.9,0.5,0.25\n0.8,0.5,0.5\n0.6,0.6,0.75\n0.5,0.5,0.75\n"
+            "0.2,0.428571429,0.75\n");
+  EXPECT_EQ(cv::imread(path("out/published_pr.png")).size(), cv::Size(800, 600));
+  EXPECT_TRUE(r.err.empty()) << r.err;
+
+  // The decisions alone: the published set is their 'published' rows, the curve the same; no --decisions.
+  const ToolRun alone =
+      run("--published '" + path("decisions.csv") + "' --joined 4 --output '" + path("alone") + "'");
+  ASSERT_EQ(alone.status, 0) << alone.err;
+  EXPECT_EQ(lines(alone.out)[0], "published: 3");
+  EXPECT_EQ(lines(alone.out)[4], "score_auc: 0.525");
+
+  // Without decisions: no curve; the stream's length from --frames.
+  const ToolRun plain = run("--published '" + path("loop_closures.csv") + "' --joined 4 --frames 8 --tolerance 1" +
+                            " --output '" + path("plain") + "'");
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_EQ(lines(plain.out).size(), 5u) << plain.out;
+  EXPECT_FALSE(fs::exists(path("plain/published_pr.csv")));
+}
+
+TEST_F(EvalToolTest, BadPublishedInputGivesANonZeroExitAndOneLineReason)
+{
+  std::ofstream(path("old.csv")) << "query,match,distance\n4,0,0.1\n";
+  ToolRun r = run("--published '" + path("old.csv") + "' --joined 4 --frames 8 --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("has no 'score' column"), std::string::npos) << r.err;
+
+  std::ofstream(path("odd.csv")) << "query,match,distance,score,status,accepted\n4,0,0.1,0.9,sure,1\n";
+  r = run("--published '" + path("odd.csv") + "' --joined 4 --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("unknown status 'sure'"), std::string::npos) << r.err;
+
+  std::ofstream(path("lc.csv")) << "query,match,distance,score,status\n4,0,0.1,0.9,published\n";
+  r = run("--published '" + path("lc.csv") + "' --joined 4 --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("need the stream's length"), std::string::npos) << r.err;
+
+  r = run("--published '" + path("lc.csv") + "' --joined 9 --frames 8 --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("must start at a frame in [1, 7]"), std::string::npos) << r.err;
+
+  r = run("--matrix '" + path("m.npy") + "' --joined 0 --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+
+  r = run("--published '" + path("lc.csv") + "' --matrix '" + path("m.npy") + "' --joined 2 --output x");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("no --matrix"), std::string::npos) << r.err;
+
+  r = run("--matrix '" + path("m.npy") + "' --decisions '" + path("lc.csv") + "' --joined 2 --output x");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("need --published"), std::string::npos) << r.err;
+
+  r = run("--published '" + path("lc.csv") + "' --joined 2 --truth-matrix x.png --output x");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("exactly one ground truth"), std::string::npos) << r.err;
+}
+
+TEST_F(EvalToolTest, HelpDocumentsThePublishedScoringOptions)
+{
+  const ToolRun r = run("--help");
+  EXPECT_EQ(r.status, 0);
+  for (const char* option : {"--joined", "--truth-matrix", "--published", "--decisions", "--frames",
+                             "published_pr.csv", "published_pr.png"})
+  {
+    EXPECT_NE(r.out.find(option), std::string::npos) << option;
+  }
+}
+
 TEST_F(EvalToolTest, ComparesPosesWithThePublishedKittiGroundTruth)
 {
   const ToolRun r =
