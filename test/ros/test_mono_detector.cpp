@@ -7,7 +7,11 @@
 #include <ros/ros.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <mutex>
+#include <set>
+#include <sstream>
 #include <vector>
 
 #include "test_helpers.h"
@@ -59,6 +63,11 @@ TEST(MonoDetector, NightFramesCloseLoopsWithTheirDayTwins)
   const double min_correct = pnh.param("min_correct_fraction", 0.85);
   const double max_wrong = pnh.param("max_wrong_fraction", 0.05);
   const int matrix_size = pnh.param("matrix_size", 256);
+  // Precision and recall of the published set (a day loop or a night loop to the wrong place is wrong).
+  const double min_precision = pnh.param("min_precision", 0.0);
+  const double min_recall = pnh.param("min_recall", 0.0);
+  // When set: openable_offline with this configuration on the same frames must list the same loop closures.
+  const std::string offline_config = pnh.param<std::string>("offline_config", "");
 
   Recorder recorder;
   DiagnosticsWatcher diagnostics(nh);
@@ -138,6 +147,7 @@ TEST(MonoDetector, NightFramesCloseLoopsWithTheirDayTwins)
     EXPECT_FALSE(loop->has_poses);  // no ~fixed_frame here
     EXPECT_FALSE(loop->has_relative_pose);
     EXPECT_GT(loop->sequence_length, 0u);
+    EXPECT_EQ(loop->status, "published");
     if (query < frames)
     {
       ++day_loops;
@@ -156,11 +166,55 @@ TEST(MonoDetector, NightFramesCloseLoopsWithTheirDayTwins)
   }
   const double correct_fraction = double(correct) / frames;
   const double wrong_fraction = double(wrong) / frames;
-  std::printf("mono: %d of %d night frames closed a loop with their day twin (within 2), %d wrong, %d day loops\n",
-              correct, frames, wrong, day_loops);
+  const int published = int(recorder.loops().size());
+  const double precision = published ? double(correct) / published : 1.0;
+  const double recall = double(std::count(night_closed.begin(), night_closed.end(), true)) / frames;
+  std::printf("mono: %d of %d night frames closed a loop with their day twin (within 2), %d wrong, %d day loops; "
+              "precision %.3f, recall %.3f\n",
+              correct, frames, wrong, day_loops, precision, recall);
   EXPECT_GE(correct_fraction, min_correct);
   EXPECT_LE(wrong_fraction, max_wrong);
   EXPECT_EQ(day_loops, 0);
+  EXPECT_GE(precision, min_precision);
+  EXPECT_GE(recall, min_recall);
+
+  if (!offline_config.empty())
+  {
+    // The same frames as one folder, through the offline tool: the same pipeline, so the same loops.
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("openable_mono_offline_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir / "stream");
+    for (int index = 0; index < 2 * frames; ++index)
+    {
+      const bool night = index >= frames;
+      char from[1024], to[64];
+      std::snprintf(from, sizeof(from), "%s/%s/Image%03d.jpg", data_dir.c_str(), night ? "night_right" : "day_right",
+                    night ? index - frames : index);
+      std::snprintf(to, sizeof(to), "frame%04d.jpg", index);
+      fs::create_symlink(from, dir / "stream" / to);
+    }
+    const std::string command = std::string(OPENABLE_OFFLINE_BINARY) + " --config " + offline_config +
+                                " --reference " + (dir / "stream").string() + " --output " + (dir / "out").string() +
+                                " > " + (dir / "log").string() + " 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    std::ifstream csv(dir / "out" / "loop_closures.csv");
+    std::string line;
+    std::getline(csv, line);
+    std::set<std::pair<int, int>> offline, nodelet;
+    while (std::getline(csv, line))
+    {
+      int query = 0, match = 0;
+      char comma = 0;
+      std::istringstream(line) >> query >> comma >> match;
+      offline.insert({query, match});
+    }
+    for (const auto& loop : recorder.loops())
+      nodelet.insert({int(loop->query_id), int(loop->match_id)});
+    EXPECT_EQ(offline.size(), nodelet.size());
+    EXPECT_TRUE(offline == nodelet) << "openable_offline and the nodelet published different loop closures";
+    fs::remove_all(dir);
+  }
 }
 
 int main(int argc, char** argv)
