@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "openable/error.h"
 #include "openable/hamming.h"
 
 namespace openable
@@ -19,7 +20,13 @@ uint32_t quantizedL2(const uint64_t* a, const uint64_t* b, int length)
 }
 }  // namespace
 
-FrameMetric::FrameMetric(const DescriptorLayout& layout) : layout_(layout) {}
+FrameMetric::FrameMetric(const DescriptorLayout& layout) : layout_(layout)
+{
+  // Every distance below trusts the layout: a corrupt one would read past the descriptors.
+  const std::string problem = layout.check();
+  if (!problem.empty())
+    throw Error("FrameMetric: unsupported descriptor " + problem);
+}
 
 uint32_t FrameMetric::blockDistance(const uint64_t* a, const uint64_t* b) const
 {
@@ -41,7 +48,7 @@ uint32_t FrameMetric::distance(const uint64_t* a, const uint64_t* b, int* shift)
     return blockDistance(a, b);
   // Every block of a against every block of b, then the one circular shift s whose sum of
   // d(a_i, b_{(i+s) mod blocks}) is smallest: a panorama seen from a rotated heading.
-  const int words = layout_.blockWords();
+  const size_t words = layout_.blockWords();
   std::vector<uint32_t> d(static_cast<size_t>(blocks) * blocks);
   for (int i = 0; i < blocks; ++i)
     for (int j = 0; j < blocks; ++j)
