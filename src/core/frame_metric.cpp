@@ -11,12 +11,16 @@ namespace openable
 {
 namespace
 {
-/// L2 distance of two unit float vectors (0..2) as an integer 0..kFloatScale.
+/// L2 distance of two unit float vectors (0..2) as an integer 0..kFloatScale. Cells holding NaN or
+/// infinity (a corrupt map: the describer never writes them) are as far as cells can be; converting NaN to
+/// an integer would be undefined (found by fuzzing the map loader).
 uint32_t quantizedL2(const uint64_t* a, const uint64_t* b, int length)
 {
   const float d = l2Distance(reinterpret_cast<const float*>(a), reinterpret_cast<const float*>(b), length);
   const double scaled = std::round(double(d) * 0.5 * kFloatScale);
-  return static_cast<uint32_t>(std::min<double>(scaled, kFloatScale));
+  if (!(scaled < kFloatScale))
+    return kFloatScale;
+  return static_cast<uint32_t>(scaled);
 }
 }  // namespace
 

@@ -3,10 +3,12 @@
 // test/data/repro (README there).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "memory_limit.h"
 #include "openable/config.h"
@@ -168,4 +170,26 @@ TEST(MapHardening, MoreFramesThanTheCapacityAreRefused)
   // The same frames with room for them load.
   const std::string fine = writeTemp("capacity_ok.map", craftMap(64, 1, 2, 2, payload));
   EXPECT_EQ(PlaceDatabase::load(fine).size(), 2u);
+}
+
+TEST(MapHardening, NonFiniteFloatCellsAreAsFarAsCellsCanBe)
+{
+  // Found by fuzzing the map loader (test/fuzz/corpus/map_loader/found_float_nan_distance.map): a stored
+  // float descriptor holding NaN reached a NaN -> uint32 conversion in FrameMetric.
+  DescriptorLayout sift;
+  sift.binary = false;
+  sift.cell_length = 128;
+  sift.cell_words = 64;
+  std::vector<float> a(128, 0.0f), b(128, 0.0f);
+  a[0] = 1.0f;
+  b[0] = std::nanf("");
+  uint64_t wa[64], wb[64];
+  std::memcpy(wa, a.data(), sizeof(wa));
+  std::memcpy(wb, b.data(), sizeof(wb));
+  const FrameMetric metric(sift);
+  EXPECT_EQ(metric.distance(wa, wb), kFloatScale);
+  b[0] = INFINITY;
+  std::memcpy(wb, b.data(), sizeof(wb));
+  EXPECT_EQ(metric.distance(wa, wb), kFloatScale);
+  EXPECT_EQ(metric.distance(wa, wa), 0u);
 }
