@@ -33,5 +33,21 @@ demo: build
 bench: build
 	@bash scripts/bench.sh $(WS)
 
+# Fuzzes the loaders of untrusted files (map, configuration YAML, .npy) with libFuzzer, ASan and UBSan,
+# FUZZ_SECONDS each. Needs clang, installed here rather than by deps: make test does not need it.
+FUZZ_SECONDS ?= 60
+.PHONY: fuzz
+fuzz: deps
+	@dpkg-query -W -f='$${Status}' clang 2>/dev/null | grep -q "install ok installed" || { \
+	  SUDO=""; [ "$$(id -u)" -eq 0 ] || SUDO=sudo; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends clang >/dev/null; }
+	@FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) bash test/fuzz/run_fuzz.sh
+
+# Memory of LoopDetector over 100,000 frames, unbounded and with max_history 10,000 (doc/performance.md).
+.PHONY: soak
+soak: build
+	$(WS)/devel/lib/openable_ros/openable_soak --max-history 0
+	$(WS)/devel/lib/openable_ros/openable_soak --max-history 10000
+
 clean:
 	rm -rf build

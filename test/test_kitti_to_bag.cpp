@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -336,6 +337,101 @@ TEST_F(KittiToBag, BadArguments)
   const ToolRun poses = run("--sequence " + kSequence + " --output " + dir_ + "/x.bag --poses " + dir_ + "/none.txt");
   EXPECT_EQ(poses.status, 1);
   EXPECT_NE(poses.output.find("cannot read poses file"), std::string::npos) << poses.output;
+}
+
+// Issue 9 (hardening): a failed run keeps an existing bag; numbers that cannot be a camera or a pose, frame
+// names that cannot be frame numbers and stamps that cannot be ROS times are errors naming file and line.
+std::string readText(const std::string& path)
+{
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void writeText(const fs::path& path, const std::string& text)
+{
+  std::ofstream(path) << text;
+}
+
+/// KITTI 07's calib.txt with line `line` (1-based) replaced.
+std::string calibrationWithLine(int line, const std::string& replacement)
+{
+  std::istringstream in(readText(kSequence + "/calib.txt"));
+  std::string out, text;
+  for (int number = 1; std::getline(in, text); ++number)
+    out += (number == line ? replacement : text) + "\n";
+  return out;
+}
+
+TEST_F(KittiToBag, FailedRunLeavesAnExistingBagUntouched)
+{
+  // Frame 1 is not an image: the run fails after the bag was opened.
+  const fs::path d = fs::path(fixture("broken_image", true, true, false));
+  fs::create_directories(d / "image_0");
+  fs::create_symlink(kSequence + "/image_0/000000.png", d / "image_0" / "000000.png");
+  writeText(d / "image_0" / "000001.png", "not a png");
+  const std::string bag_path = dir_ + "/existing.bag";
+  writeText(bag_path, "the previous bag");
+  const ToolRun r = run("--sequence " + d.string() + " --output " + bag_path);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("cannot read image"), std::string::npos) << r.output;
+  EXPECT_EQ(readText(bag_path), "the previous bag");
+  for (const auto& entry : fs::directory_iterator(dir_))
+    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
+
+  // A successful run replaces it.
+  const ToolRun ok = run("--sequence " + kSequence + " --output " + bag_path + " --last 1");
+  ASSERT_EQ(ok.status, 0) << ok.output;
+  rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
+  EXPECT_EQ(rosbag::View(bag).size(), 4u);
+}
+
+TEST_F(KittiToBag, CalibrationWithoutFocalLengthIsRefusedNamingFileAndLine)
+{
+  // P0 all zeros: the camera offset would divide by fx = 0 and put NaN into every camera_info and /tf.
+  const fs::path d = fs::path(fixture("zero_calib", false, true, true));
+  writeText(d / "calib.txt", calibrationWithLine(1, "P0: 0 0 0 0 0 0 0 0 0 0 0 0"));
+  const ToolRun r = run("--sequence " + d.string() + " --output " + dir_ + "/x.bag --last 1");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find((d / "calib.txt").string() + ":1: P0 has focal lengths"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ + "/x.bag"));
+}
+
+TEST_F(KittiToBag, PoseThatIsNotARotationIsRefusedNamingFileAndLine)
+{
+  const std::string poses = dir_ + "/poses.txt";
+  writeText(poses, "1 0 0 0 0 1 0 0 0 0 1 0\n0 0 0 1 0 0 0 2 0 0 0 3\n");  // line 2: zero rotation
+  const ToolRun r = run("--sequence " + kSequence + " --output " + dir_ + "/x.bag --last 1 --poses " + poses);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find(poses + ":2: the pose has a rotation part that is not a rotation"), std::string::npos)
+      << r.output;
+}
+
+TEST_F(KittiToBag, TwentyDigitImageNameIsAClearError)
+{
+  const fs::path d = fs::path(fixture("long_name", true, true, false));
+  fs::create_directories(d / "image_0");
+  fs::create_symlink(kSequence + "/image_0/000000.png", d / "image_0" / "000000.png");
+  fs::create_symlink(kSequence + "/image_0/000001.png", d / "image_0" / "12345678901234567890.png");
+  const ToolRun r = run("--sequence " + d.string() + " --output " + dir_ + "/x.bag");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("12345678901234567890.png: frame number 12345678901234567890 is too large"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("stol"), std::string::npos) << r.output;
+}
+
+TEST_F(KittiToBag, StampPastTwoToThe32SecondsIsRefusedNamingTheFile)
+{
+  const fs::path d = fs::path(fixture("late", true, false, true));
+  std::string times;
+  for (int i = 0; i < 160; ++i)
+    times += std::to_string(300000000 + i) + ".0\n";
+  writeText(d / "times.txt", times);
+  // 4e9 + 3e8 s > 2^32 s (4294967296): no ROS time holds it.
+  const ToolRun r = run("--sequence " + d.string() + " --output " + dir_ + "/x.bag --time-offset 4e9");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find((d / "times.txt").string() + ":1: time"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("largest ROS time"), std::string::npos) << r.output;
 }
 
 }  // namespace

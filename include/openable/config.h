@@ -1,10 +1,19 @@
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace openable
 {
+/// Estimated bytes per patch pixel while a frame is preprocessed: 3 (8-bit colour downsample) + 1 (grey)
+/// + 4 (float intensity) + 4 (patch normalisation) + 4 (the patches cut out of it).
+constexpr uint64_t kWorkingBytesPerPatchPixel = 16;
+/// Generous bound on those images per frame: 1 GiB (64 Mpx of patches, e.g. a 64x64 grid of 128 px
+/// patches). The defaults use 64 KiB; a 64x64 grid of 1024 px patches would need 64 GiB per frame and is
+/// refused by validate() instead of failing in an allocation.
+constexpr uint64_t kMaxWorkingBytesPerFrame = uint64_t(1) << 30;
+
 /// Every parameter of the toolbox. The same snake_case keys are used in YAML files, on the command line
 /// (`--set key=value`) and as private ROS parameters of the nodelets. config/default.yaml documents them.
 struct Config
@@ -48,8 +57,13 @@ struct Config
   std::string display_normalization = "minmax";  ///< distance matrix images: max (paper Eq. 5) | minmax (stretch)
   int color_map = 7;  ///< OpenABLE's 12 colour maps (0..11, OpenCV COLORMAP_AUTUMN .. COLORMAP_HOT)
 
-  /// Errors of the form "key: value 'x' is not allowed; expected ...". Empty when valid.
+  /// Errors of the form "key: value 'x' is not allowed; expected ...". Empty when valid. Besides each
+  /// key's range, refuses combinations whose images need more than kMaxWorkingBytesPerFrame per frame.
   std::vector<std::string> validate() const;
+  /// Bytes of the images one frame is turned into before description (workingBytesPerFrame = cells x
+  /// patch_size^2 x kWorkingBytesPerPatchPixel; the 8-bit colour downsample, its grey and float copies, the
+  /// float patches cut from it). 64 KiB for the defaults.
+  uint64_t workingBytesPerFrame() const;
   /// Throws openable::Error with every validation error joined, when there are any.
   void validateOrThrow() const;
 

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <map>
 #include <opencv2/core.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace openable
@@ -11,7 +13,8 @@ namespace openable
 /// Stored as a sorted list of "anchor" reference frames per query plus a tolerance in frames: query q
 /// truly matches reference r when some anchor a of q has |r - a| <= tolerance. Aligned traversals are
 /// anchors {q} with tolerance T; a pairs file is its pairs with the pair tolerance; poses give their loop
-/// pairs with tolerance 0.
+/// pairs with tolerance 0. Only queries with anchors take memory, so a pairs file naming frame 2^31 - 2
+/// costs one entry, not an array of that many queries.
 class GroundTruth
 {
 public:
@@ -20,6 +23,10 @@ public:
   /// matrix must have exactly that shape (true) or at least that many rows and columns (false).
   GroundTruth(std::vector<std::vector<int>> anchors, int tolerance, int num_queries, int num_references,
               bool exact_shape, std::string description);
+  /// The same from (query, anchor) pairs (any order, duplicates allowed): memory follows the pairs, not
+  /// the largest index.
+  static GroundTruth fromPairs(const std::vector<std::pair<int, int>>& pairs, int tolerance, int num_queries,
+                               int num_references, bool exact_shape, std::string description);
 
   int tolerance() const
   {
@@ -53,13 +60,18 @@ public:
   }
   /// Number of (query, anchor) pairs.
   size_t numPairs() const;
+  /// Every query that has anchors, with its sorted, unique anchors, by ascending query.
+  const std::map<int, std::vector<int>>& anchorsByQuery() const
+  {
+    return anchors_;
+  }
 
   /// Throws Error when a `rows` x `cols` distance matrix cannot be judged with this ground truth:
   /// wrong shape, or an anchor outside the matrix.
   void checkFits(int rows, int cols) const;
 
 private:
-  std::vector<std::vector<int>> anchors_;
+  std::map<int, std::vector<int>> anchors_;
   int tolerance_;
   int num_queries_;
   int num_references_;

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -22,14 +23,20 @@ struct DescriptorLayout
   int cells = 1;
   int blocks = 1;
 
-  int frameWords() const
+  /// In size_t: two ints of a loaded (untrusted) layout can multiply past INT_MAX. Only meaningful for a
+  /// layout that check() accepts.
+  size_t frameWords() const
   {
-    return cell_words * cells;
+    return static_cast<size_t>(cell_words) * static_cast<size_t>(cells);
   }
-  int blockWords() const
+  size_t blockWords() const
   {
-    return frameWords() / blocks;
+    return frameWords() / static_cast<size_t>(blocks);
   }
+  /// Empty when the layout is one FrameDescriber can produce and FrameMetric can measure: positive
+  /// fields, cell_words matching cell_length, cells a multiple of blocks, at most kMaxFrameWords words,
+  /// at most kMaxBlocks blocks, and frame distances that fit 32 bits. Otherwise what is wrong.
+  std::string check() const;
   /// Largest distance between two cells (bits for binary, kFloatScale for float).
   uint32_t maxCellDistance() const;
   /// Largest frame distance: the normalisation of every distance the library reports.
@@ -47,6 +54,11 @@ struct DescriptorLayout
     return !(*this == o);
   }
 };
+
+/// Largest descriptor of one frame: 2^24 words = 128 MiB (a grid of 64x64 cells of 128 floats is 2^18).
+constexpr size_t kMaxFrameWords = size_t(1) << 24;
+/// Largest number of sub-panoramas: FrameMetric compares every block with every block (blocks^2 distances).
+constexpr int kMaxBlocks = 1024;
 
 /// Float cell distances are the L2 distance of unit vectors (0..2) scaled to integers 0..kFloatScale, so
 /// that sequence sums are exact integer arithmetic for every descriptor.

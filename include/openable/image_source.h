@@ -12,11 +12,15 @@ namespace openable
 class ImageSource
 {
 public:
-  /// Throws Error when the path does not exist, holds no image, or the video cannot be opened.
+  /// Throws Error when the path does not exist, holds no image, or the video cannot be opened or has no
+  /// decodable frame. A video is decoded once here to count its frames (containers' counts are missing or
+  /// wrong too often to size anything by), so opening costs one pass over the video.
   explicit ImageSource(const std::string& path);
   ~ImageSource();
 
-  /// Frames in the source (for videos, as reported by the container; may be approximate).
+  /// Frames in the source: image files of a folder, or frames of a video that decode. next() returns at
+  /// most size() frames: exactly size() for a video, and for a folder size() entries of which unreadable
+  /// files come as empty images.
   size_t size() const;
   bool isVideo() const;
 

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -186,6 +188,15 @@ const KeyAccess& find(const std::string& key)
   throw Error("unknown configuration key '" + key + "'; known keys: " + known);
 }
 
+/// A configuration file is a few kilobytes; anything much larger is not one (or is a device).
+constexpr size_t kMaxConfigFileBytes = 1 << 20;
+
+std::string oneLine(std::string text)
+{
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return trim(text);
+}
+
 std::string oneOf(const std::vector<std::string>& values)
 {
   std::string s;
@@ -263,6 +274,14 @@ std::vector<std::string> Config::validate() const
     bad("grid_x/grid_y", std::to_string(grid_x) + "x" + std::to_string(grid_y),
         "1x1 with description_type global (set description_type: grid to use a grid)");
   inRange("panoramas", panoramas, 1, 64);
+  const uint64_t working_bytes = workingBytesPerFrame();
+  if (working_bytes > kMaxWorkingBytesPerFrame)
+    bad("patch_size/grid_x/grid_y" + std::string(camera_type == "panoramic" ? "/panoramas" : ""),
+        std::to_string(patch_size) + " px, " + std::to_string(grid_x) + "x" + std::to_string(grid_y) + " cells" +
+            (camera_type == "panoramic" ? ", " + std::to_string(panoramas) + " panoramas" : ""),
+        "at most " + std::to_string(kMaxWorkingBytesPerFrame) + " bytes of images per frame; this asks for " +
+            std::to_string(working_bytes) + " bytes per frame (" + std::to_string(kWorkingBytesPerPatchPixel) +
+            " bytes per patch pixel)");
   inRange("patch_normalization", patch_normalization, 0, patch_size);
   if (!std::isfinite(alpha) || alpha < 0.0 || alpha > 1.0)
     bad("alpha", formatDouble(alpha), "a number in [0, 1]");
@@ -281,10 +300,11 @@ std::vector<std::string> Config::validate() const
     bad("min_uniqueness", formatDouble(min_uniqueness), "a number in [0, 1]");
   inRange("uniqueness_window", uniqueness_window, 0, 100000);
   inRange("max_history", max_history, 0, 100000000);
-  if (max_history > 0 && max_history <= 2 * (sequence_length + exclusion_window))
+  // In 64 bits: sequence_length and exclusion_window may themselves be out of range (up to INT_MAX) here.
+  const int64_t history_floor = 2 * (int64_t(sequence_length) + int64_t(exclusion_window));
+  if (max_history > 0 && max_history <= history_floor)
     bad("max_history", std::to_string(max_history),
-        "0 (unbounded) or more than 2 * (sequence_length + exclusion_window) = " +
-            std::to_string(2 * (sequence_length + exclusion_window)));
+        "0 (unbounded) or more than 2 * (sequence_length + exclusion_window) = " + std::to_string(history_floor));
   inRange("min_candidates", min_candidates, 0, 100000000);
   inRange("consistent_frames", consistent_frames, 1, 1000);
   inRange("consistency_tolerance", consistency_tolerance, 0, 1000);
@@ -297,6 +317,18 @@ std::vector<std::string> Config::validate() const
     bad("display_normalization", display_normalization, "max | minmax");
   inRange("color_map", color_map, 0, 11);
   return errors;
+}
+
+uint64_t Config::workingBytesPerFrame() const
+{
+  // Out-of-range fields (up to INT_MAX, or negative) are validation errors of their own; here they must
+  // neither wrap nor hide the figure, so negatives count as 0 and products saturate.
+  const auto field = [](int v) { return uint64_t(std::max(v, 0)); };
+  const auto times = [](uint64_t a, uint64_t b) { return (b != 0 && a > UINT64_MAX / b) ? UINT64_MAX : a * b; };
+  uint64_t cells = description_type == "grid" ? times(field(grid_x), field(grid_y)) : 1;
+  if (camera_type == "panoramic")
+    cells = times(cells, field(panoramas));
+  return times(times(cells, times(field(patch_size), field(patch_size))), kWorkingBytesPerPatchPixel);
 }
 
 void Config::validateOrThrow() const
@@ -326,26 +358,50 @@ Config Config::fromYamlString(const std::string& yaml)
     return config;
   if (!root.IsMap())
     throw Error("configuration must be a YAML mapping of key: value");
-  for (const auto& entry : root)
+  try
   {
-    const std::string key = entry.first.as<std::string>();
-    if (!entry.second.IsScalar())
-      throw Error(key + ": expected a single value, not a list or mapping");
-    config.set(key, entry.second.as<std::string>());
+    for (const auto& entry : root)
+    {
+      // YAML allows lists and mappings as keys too ("? [a, b]: 1"); as<std::string>() would throw
+      // yaml-cpp's own exception for them.
+      if (!entry.first.IsScalar())
+        throw Error("key '" + oneLine(YAML::Dump(entry.first)) + "' is a list or mapping; expected a key name");
+      const std::string key = entry.first.Scalar();
+      if (!entry.second.IsScalar())
+        throw Error(key + ": value '" + oneLine(YAML::Dump(entry.second)) +
+                    "' is a list, a mapping or empty; expected a single value");
+      config.set(key, entry.second.Scalar());
+    }
+  }
+  catch (const YAML::Exception& e)
+  {
+    // Whatever yaml-cpp still throws (it has no other way to say no) leaves as the library's Error.
+    throw Error(std::string("configuration cannot be read: ") + e.what());
   }
   return config;
 }
 
 Config Config::fromYamlFile(const std::string& path)
 {
-  std::ifstream in(path);
+  // A folder opens as an empty stream on Linux and would silently give the defaults; a device or a pipe
+  // could be read forever. A configuration file is a regular file of a few kilobytes.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw Error("configuration '" + path + "' is a folder; expected a YAML file");
+  std::ifstream in(path, std::ios::binary);
   if (!in)
     throw Error("cannot read configuration file '" + path + "'");
-  std::stringstream text;
-  text << in.rdbuf();
+  std::string text(kMaxConfigFileBytes + 1, '\0');
+  in.read(&text[0], static_cast<std::streamsize>(text.size()));
+  if (in.bad())
+    throw Error("cannot read configuration file '" + path + "'");
+  text.resize(static_cast<size_t>(in.gcount()));
+  if (text.size() > kMaxConfigFileBytes)
+    throw Error("configuration file '" + path + "' is larger than " + std::to_string(kMaxConfigFileBytes) +
+                " bytes; expected a YAML mapping of key: value");
   try
   {
-    return fromYamlString(text.str());
+    return fromYamlString(text);
   }
   catch (const Error& e)
   {

@@ -10,7 +10,9 @@
 #include <iomanip>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <set>
 #include <sstream>
+#include <utility>
 
 #include "openable/error.h"
 #include "openable/image_source.h"
@@ -181,8 +183,7 @@ void sweepThresholds(EvaluationResult& result)
 
 GroundTruth::GroundTruth(std::vector<std::vector<int>> anchors, int tolerance, int num_queries, int num_references,
                          bool exact_shape, std::string description)
-  : anchors_(std::move(anchors)),
-    tolerance_(tolerance),
+  : tolerance_(tolerance),
     num_queries_(num_queries),
     num_references_(num_references),
     exact_shape_(exact_shape),
@@ -192,37 +193,58 @@ GroundTruth::GroundTruth(std::vector<std::vector<int>> anchors, int tolerance, i
   {
     throw Error("ground truth: tolerance must be >= 0 frames, got " + std::to_string(tolerance_));
   }
-  for (std::vector<int>& list : anchors_)
+  for (size_t q = 0; q < anchors.size(); ++q)
   {
+    std::vector<int>& list = anchors[q];
+    if (list.empty())
+    {
+      continue;
+    }
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
+    anchors_.emplace(static_cast<int>(q), std::move(list));
   }
+}
+
+GroundTruth GroundTruth::fromPairs(const std::vector<std::pair<int, int>>& pairs, int tolerance, int num_queries,
+                                   int num_references, bool exact_shape, std::string description)
+{
+  GroundTruth truth({}, tolerance, num_queries, num_references, exact_shape, std::move(description));
+  for (const auto& pair : pairs)
+  {
+    truth.anchors_[pair.first].push_back(pair.second);
+  }
+  for (auto& entry : truth.anchors_)
+  {
+    std::sort(entry.second.begin(), entry.second.end());
+    entry.second.erase(std::unique(entry.second.begin(), entry.second.end()), entry.second.end());
+  }
+  return truth;
 }
 
 const std::vector<int>& GroundTruth::anchors(int query) const
 {
   static const std::vector<int> kNone;
-  if (query < 0 || static_cast<size_t>(query) >= anchors_.size())
-  {
-    return kNone;
-  }
-  return anchors_[query];
+  const auto found = anchors_.find(query);
+  return found == anchors_.end() ? kNone : found->second;
 }
 
 bool GroundTruth::isMatch(int query, int reference) const
 {
   const std::vector<int>& list = anchors(query);
   // The first anchor >= reference - tolerance is the only one that can be within tolerance from below.
-  auto it = std::lower_bound(list.begin(), list.end(), reference - tolerance_);
-  return it != list.end() && *it <= reference + tolerance_;
+  // In 64 bits: a tolerance near INT_MAX (e.g. "every frame matches") must not wrap.
+  const int64_t low = int64_t(reference) - tolerance_;
+  const auto it = std::lower_bound(list.begin(), list.end(), low, [](int a, int64_t b) { return a < b; });
+  return it != list.end() && int64_t(*it) <= int64_t(reference) + tolerance_;
 }
 
 size_t GroundTruth::numPairs() const
 {
   size_t pairs = 0;
-  for (const std::vector<int>& list : anchors_)
+  for (const auto& entry : anchors_)
   {
-    pairs += list.size();
+    pairs += entry.second.size();
   }
   return pairs;
 }
@@ -239,12 +261,12 @@ void GroundTruth::checkFits(int rows, int cols) const
     throw Error("ground truth (" + description_ + ") needs at least " + shapeText(num_queries_, num_references_) +
                 " (queries x references), but the distance matrix is " + shapeText(rows, cols));
   }
-  for (size_t q = 0; q < anchors_.size(); ++q)
+  for (const auto& entry : anchors_)
   {
-    if (!anchors_[q].empty() && (static_cast<int>(q) >= rows || anchors_[q].back() >= cols))
+    if (entry.first >= rows || entry.second.back() >= cols)
     {
-      throw Error("ground truth (" + description_ + ") pair (" + std::to_string(q) + ", " +
-                  std::to_string(anchors_[q].back()) + ") is out of range for a " + shapeText(rows, cols) +
+      throw Error("ground truth (" + description_ + ") pair (" + std::to_string(entry.first) + ", " +
+                  std::to_string(entry.second.back()) + ") is out of range for a " + shapeText(rows, cols) +
                   " distance matrix");
     }
   }
@@ -285,7 +307,7 @@ GroundTruth loadPairsGroundTruth(const std::string& path, int pair_tolerance)
     throw Error("pairs ground truth: tolerance must be >= 0 frames, got " + std::to_string(pair_tolerance));
   }
   std::ifstream in = openText(path, "pairs ground truth");
-  std::vector<std::vector<int>> anchors;
+  std::vector<std::pair<int, int>> pairs;
   int declared_rows = 0, declared_cols = 0, max_i = -1, max_j = -1;
   bool declared = false;
   std::string line;
@@ -302,7 +324,8 @@ GroundTruth loadPairsGroundTruth(const std::string& path, int pair_tolerance)
     const bool parsed = static_cast<bool>(fields >> i >> j);
     // Anything after the two indices must be a comment.
     const bool trailing = parsed && (fields >> rest) && rest[0] != '#';
-    if (!parsed || trailing || i < 0 || j < 0 || i > INT32_MAX || j > INT32_MAX)
+    // Below INT32_MAX: the matrix needs index + 1 rows or columns, which must fit an int.
+    if (!parsed || trailing || i < 0 || j < 0 || i >= INT32_MAX || j >= INT32_MAX)
     {
       throw Error("pairs ground truth: '" + path + "' line " + std::to_string(number) +
                   " is not two non-negative frame indices 'i j': '" + line + "'");
@@ -313,20 +336,16 @@ GroundTruth loadPairsGroundTruth(const std::string& path, int pair_tolerance)
                   ", " + std::to_string(j) + ") is out of range for its declared shape " +
                   shapeText(declared_rows, declared_cols));
     }
-    if (static_cast<size_t>(i) >= anchors.size())
-    {
-      anchors.resize(i + 1);
-    }
-    anchors[i].push_back(static_cast<int>(j));
+    pairs.emplace_back(static_cast<int>(i), static_cast<int>(j));
     max_i = std::max(max_i, static_cast<int>(i));
     max_j = std::max(max_j, static_cast<int>(j));
   }
   std::string description = "pairs from " + path + ", tolerance " + std::to_string(pair_tolerance);
   if (declared)
   {
-    return GroundTruth(std::move(anchors), pair_tolerance, declared_rows, declared_cols, true, description);
+    return GroundTruth::fromPairs(pairs, pair_tolerance, declared_rows, declared_cols, true, description);
   }
-  return GroundTruth(std::move(anchors), pair_tolerance, max_i + 1, max_j + 1, false, description);
+  return GroundTruth::fromPairs(pairs, pair_tolerance, max_i + 1, max_j + 1, false, description);
 }
 
 std::vector<cv::Vec3d> loadKittiPositions(const std::string& path)
@@ -421,9 +440,17 @@ double GroundTruthAgreement::queryJaccard() const
 GroundTruthAgreement compareGroundTruth(const GroundTruth& candidate, const GroundTruth& reference)
 {
   GroundTruthAgreement agreement;
-  const int queries = std::max(candidate.numQueries(), reference.numQueries());
+  // Only queries with anchors on either side count, so visit those rather than every possible query.
+  std::set<int> queries;
+  for (const GroundTruth* truth : {&candidate, &reference})
+  {
+    for (const auto& entry : truth->anchorsByQuery())
+    {
+      queries.insert(entry.first);
+    }
+  }
   std::vector<int> common;
-  for (int q = 0; q < queries; ++q)
+  for (int q : queries)
   {
     const std::vector<int>& a = candidate.anchors(q);
     const std::vector<int>& b = reference.anchors(q);

@@ -4,22 +4,33 @@
 #include <cmath>
 #include <vector>
 
+#include "openable/error.h"
 #include "openable/hamming.h"
 
 namespace openable
 {
 namespace
 {
-/// L2 distance of two unit float vectors (0..2) as an integer 0..kFloatScale.
+/// L2 distance of two unit float vectors (0..2) as an integer 0..kFloatScale. Cells holding NaN or
+/// infinity (a corrupt map: the describer never writes them) are as far as cells can be; converting NaN to
+/// an integer would be undefined (found by fuzzing the map loader).
 uint32_t quantizedL2(const uint64_t* a, const uint64_t* b, int length)
 {
   const float d = l2Distance(reinterpret_cast<const float*>(a), reinterpret_cast<const float*>(b), length);
   const double scaled = std::round(double(d) * 0.5 * kFloatScale);
-  return static_cast<uint32_t>(std::min<double>(scaled, kFloatScale));
+  if (!(scaled < kFloatScale))
+    return kFloatScale;
+  return static_cast<uint32_t>(scaled);
 }
 }  // namespace
 
-FrameMetric::FrameMetric(const DescriptorLayout& layout) : layout_(layout) {}
+FrameMetric::FrameMetric(const DescriptorLayout& layout) : layout_(layout)
+{
+  // Every distance below trusts the layout: a corrupt one would read past the descriptors.
+  const std::string problem = layout.check();
+  if (!problem.empty())
+    throw Error("FrameMetric: unsupported descriptor " + problem);
+}
 
 uint32_t FrameMetric::blockDistance(const uint64_t* a, const uint64_t* b) const
 {
@@ -41,7 +52,7 @@ uint32_t FrameMetric::distance(const uint64_t* a, const uint64_t* b, int* shift)
     return blockDistance(a, b);
   // Every block of a against every block of b, then the one circular shift s whose sum of
   // d(a_i, b_{(i+s) mod blocks}) is smallest: a panorama seen from a rotated heading.
-  const int words = layout_.blockWords();
+  const size_t words = layout_.blockWords();
   std::vector<uint32_t> d(static_cast<size_t>(blocks) * blocks);
   for (int i = 0; i < blocks; ++i)
     for (int j = 0; j < blocks; ++j)

@@ -32,6 +32,20 @@ bool isImageFile(const fs::path& p)
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".ppm" || ext == ".pgm";
 }
+/// Frames of a video that really decode, by reading it to the end. Containers' frame counts
+/// (CAP_PROP_FRAME_COUNT) are absent for raw streams (MJPEG: 0) and wrong for some files (an AVI header one
+/// short), so callers that size arrays by size() would overrun or leave holes.
+size_t countDecodableFrames(const std::string& path)
+{
+  cv::VideoCapture capture;
+  if (!capture.open(path) || !capture.isOpened())
+    throw Error("cannot open '" + path + "' as a video; expected a folder of images or a video file");
+  size_t frames = 0;
+  cv::Mat image;
+  while (capture.read(image) && !image.empty())
+    ++frames;
+  return frames;
+}
 }  // namespace
 
 ImageSource::ImageSource(const std::string& path) : path_(path)
@@ -50,9 +64,12 @@ ImageSource::ImageSource(const std::string& path) : path_(path)
     return;
   }
   video_ = std::make_unique<Video>();
+  video_->frames = countDecodableFrames(path);
+  if (video_->frames == 0)
+    throw Error("video '" + path + "' has no frame that can be decoded");
+  // The counting pass consumed the capture; reopen to stream from the first frame.
   if (!video_->capture.open(path) || !video_->capture.isOpened())
-    throw Error("cannot open '" + path + "' as a video; expected a folder of images or a video file");
-  video_->frames = static_cast<size_t>(std::max(0.0, video_->capture.get(cv::CAP_PROP_FRAME_COUNT)));
+    throw Error("cannot reopen video '" + path + "' after counting its frames");
 }
 
 ImageSource::~ImageSource() = default;
@@ -71,7 +88,8 @@ bool ImageSource::next(cv::Mat& image, std::string& name)
 {
   if (video_)
   {
-    if (!video_->capture.read(image) || image.empty())
+    // Never more than size(): callers allocate by it.
+    if (video_->read >= video_->frames || !video_->capture.read(image) || image.empty())
       return false;
     name = "frame_" + std::to_string(video_->read++);
     return true;

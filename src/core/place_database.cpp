@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <sstream>
+#include <limits>
 
+#include "openable/config.h"
 #include "openable/error.h"
 #include "openable/image_source.h"
+
+namespace fs = std::filesystem;
 
 namespace openable
 {
@@ -26,6 +30,50 @@ uint64_t fnv1a(const char* data, size_t size)
     hash *= 0x100000001b3ULL;
   }
   return hash;
+}
+
+/// Bytes of one frame's metadata in the file before its source name: id, stamp, session, pose flag, pose,
+/// name length.
+constexpr size_t kFrameInfoBytes = 8 + 8 + 4 + 1 + 7 * 8 + 8;
+/// A stored configuration is a few hundred bytes of YAML.
+constexpr size_t kMaxConfigBytes = 1 << 20;
+
+/// The whole file, read in one piece of exactly its size. Only regular files: a device (/dev/zero) or a
+/// pipe has no size and would be read until memory runs out.
+std::string readMapFile(const std::string& path)
+{
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status))
+    throw Error("cannot open map file '" + path + "' (missing or unreadable)");
+  if (!fs::is_regular_file(status))
+    throw Error("map file '" + path + "' is not a regular file; expected a map written by save_map or openable");
+  const uintmax_t size = fs::file_size(path, ec);
+  if (ec || size > std::numeric_limits<size_t>::max() / 2)
+    throw Error("cannot read the size of map file '" + path + "'");
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw Error("cannot open map file '" + path + "'");
+  std::string bytes(static_cast<size_t>(size), '\0');
+  if (size > 0 && !in.read(&bytes[0], static_cast<std::streamsize>(size)))
+    throw Error("cannot read map file '" + path + "' (it changed or shrank while being read)");
+  return bytes;
+}
+
+/// A map is only usable when its stored configuration can be compared with the running one, so an
+/// unreadable one is refused here, as part of the file, not later by whoever reads it.
+void checkStoredConfiguration(const std::string& yaml, const std::string& path)
+{
+  if (yaml.empty())
+    return;
+  try
+  {
+    Config::fromYamlString(yaml);
+  }
+  catch (const Error& e)
+  {
+    throw Error("map file '" + path + "' has an unreadable stored configuration: " + e.what());
+  }
 }
 
 /// Appends plain values (the file format is little-endian, as every platform this runs on).
@@ -99,8 +147,9 @@ private:
 PlaceDatabase::PlaceDatabase(const DescriptorLayout& layout, size_t capacity, std::string config_yaml)
   : layout_(layout), stride_(layout.frameWords()), capacity_(capacity), config_yaml_(std::move(config_yaml))
 {
-  if (stride_ == 0)
-    throw Error("PlaceDatabase: descriptor layout has no words");
+  const std::string problem = layout.check();
+  if (!problem.empty())
+    throw Error("PlaceDatabase: unsupported descriptor " + problem);
 }
 
 PlaceDatabase::PlaceDatabase(const PlaceDatabase& other)
@@ -243,12 +292,7 @@ void PlaceDatabase::save(const std::string& path) const
 
 PlaceDatabase PlaceDatabase::load(const std::string& path)
 {
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw Error("cannot open map file '" + path + "'");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::string bytes = buffer.str();
+  const std::string bytes = readMapFile(path);
   if (bytes.size() < sizeof(kMagic) + sizeof(uint64_t) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
     throw Error("'" + path + "' is not an openable_ros map file (wrong magic bytes)");
   const size_t body = bytes.size() - sizeof(uint64_t);
@@ -270,16 +314,24 @@ PlaceDatabase PlaceDatabase::load(const std::string& path)
   layout.cell_words = r.get<int32_t>("layout");
   layout.cells = r.get<int32_t>("layout");
   layout.blocks = r.get<int32_t>("layout");
-  if (layout.cell_length <= 0 || layout.cell_words <= 0 || layout.cells <= 0 || layout.blocks <= 0 ||
-      layout.cells % layout.blocks != 0 || layout.frameWords() > (1 << 24))
-    throw Error("map file '" + path + "' is corrupt (invalid descriptor layout)");
+  const std::string problem = layout.check();
+  if (!problem.empty())
+    throw Error("map file '" + path + "' is corrupt (" + problem + ")");
   const auto capacity = r.get<uint64_t>("capacity");
   const auto first_id = r.get<uint64_t>("first id");
   const auto frames = r.get<uint64_t>("frame count");
-  PlaceDatabase db(layout, capacity, r.getString("configuration", 1 << 20));
+  // The header's counts are bounded by the bytes that are really there before anything is allocated, so
+  // a small crafted file cannot ask for gigabytes.
+  if (frames > r.remaining() / (kFrameInfoBytes + sizeof(uint64_t) * layout.frameWords()))
+    throw Error("map file '" + path + "' is corrupt (frame count " + std::to_string(frames) + " does not fit its " +
+                std::to_string(bytes.size()) + " bytes)");
+  // add() keeps at most `capacity` frames; more than that would be written past the storage.
+  if (capacity != 0 && frames > capacity)
+    throw Error("map file '" + path + "' is corrupt (" + std::to_string(frames) + " frames exceed its capacity of " +
+                std::to_string(capacity) + ")");
+  PlaceDatabase db(layout, capacity, r.getString("configuration", kMaxConfigBytes));
+  checkStoredConfiguration(db.config_yaml_, path);
   db.first_id_ = first_id;
-  if (frames > r.remaining() / (sizeof(uint64_t) * layout.frameWords()))
-    throw Error("map file '" + path + "' is corrupt (frame count " + std::to_string(frames) + " too large)");
   db.infos_.resize(frames);
   for (auto& info : db.infos_)
   {

@@ -23,12 +23,15 @@
 #include <sensor_msgs/Image.h>
 #include <sys/stat.h>
 #include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <boost/make_shared.hpp>
 #include <cerrno>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -48,7 +51,7 @@ const char* const kUsage =
     "                    [--first N] [--last M] [--compression none|bz2|lz4] [--time-offset SEC]\n"
     "  --sequence DIR     KITTI odometry sequence folder: calib.txt, times.txt, image_0/ (and image_1/ with\n"
     "                     --stereo), or image_2/ (and image_3/) with --color\n"
-    "  --output FILE.bag  bag to write (overwritten)\n"
+    "  --output FILE.bag  bag to write (replaced only when the conversion succeeds)\n"
     "  --poses FILE       KITTI poses (e.g. poses/07.txt): adds /tf odom->camera_left and /kitti/odom\n"
     "  --stereo           also the right camera\n"
     "  --color            colour cameras 2 and 3 (bgr8) instead of grey cameras 0 and 1 (mono8)\n"
@@ -162,7 +165,16 @@ std::map<long, std::string> listImages(const std::string& dir)
     const std::string stem = name.substr(0, name.size() - 4);
     if (stem.empty() || !std::all_of(stem.begin(), stem.end(), ::isdigit))
       continue;
-    images[std::stol(stem)] = name;
+    // Frame numbers become the uint32 header.seq; a longer digit string is not a KITTI frame.
+    errno = 0;
+    const unsigned long long index = std::strtoull(stem.c_str(), nullptr, 10);
+    if (errno == ERANGE || index > UINT32_MAX)
+    {
+      closedir(d);
+      throw std::runtime_error(dir + "/" + name + ": frame number " + stem + " is too large (expected at most " +
+                               std::to_string(UINT32_MAX) + ", KITTI names frames NNNNNN.png)");
+    }
+    images[static_cast<long>(index)] = name;
   }
   closedir(d);
   return images;
@@ -170,6 +182,13 @@ std::map<long, std::string> listImages(const std::string& dir)
 
 using Projection = std::array<double, 12>;
 
+bool allFinite(const Projection& p)
+{
+  return std::all_of(p.begin(), p.end(), [](double v) { return std::isfinite(v); });
+}
+
+// A projection matrix P = K [I | t] of a rectified camera: finite, with positive focal lengths (the
+// camera offsets divide by them).
 std::map<std::string, Projection> readCalibration(const std::string& path)
 {
   std::ifstream in(path);
@@ -190,12 +209,40 @@ std::map<std::string, Projection> readCalibration(const std::string& path)
     for (double& v : p)
       if (!(fields >> v))
         throw std::runtime_error(path + ":" + std::to_string(number) + ": " + key + " has fewer than 12 numbers");
+    if (!allFinite(p))
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": " + key +
+                               " holds a NaN or infinite number; expected a finite 3x4 projection matrix");
+    if (!(p[0] > 0.0) || !(p[5] > 0.0))
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": " + key + " has focal lengths fx " +
+                               std::to_string(p[0]) + ", fy " + std::to_string(p[5]) +
+                               "; expected positive ones (P = K [I | t])");
     matrices[key] = p;
   }
   return matrices;
 }
 
-std::vector<double> readTimes(const std::string& path)
+// Why a 3x4 pose [R | t] cannot be one, or "" when it is: finite numbers and R a rotation (rows of unit
+// length, orthogonal, determinant +1), to KITTI's 7 printed digits. A zero or scaled R would become a
+// zero or meaningless quaternion in /tf.
+std::string poseProblem(const Projection& p)
+{
+  if (!allFinite(p))
+    return "holds a NaN or infinite number";
+  const auto dot = [&p](int a, int b) { return p[4 * a] * p[4 * b] + p[4 * a + 1] * p[4 * b + 1] + p[4 * a + 2] * p[4 * b + 2]; };
+  const double det = p[0] * (p[5] * p[10] - p[6] * p[9]) - p[1] * (p[4] * p[10] - p[6] * p[8]) +
+                     p[2] * (p[4] * p[9] - p[5] * p[8]);
+  const double tolerance = 1e-3;
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b)
+      if (std::abs(dot(a, b) - (a == b ? 1.0 : 0.0)) > tolerance)
+        return "has a rotation part that is not a rotation (rows not orthonormal)";
+  if (std::abs(det - 1.0) > tolerance)
+    return "has a rotation part with determinant " + std::to_string(det) + " (expected 1)";
+  return "";
+}
+
+// Stamps are offset + time; ROS times hold seconds in 32 bits, so both must stay below 2^32 s.
+std::vector<double> readTimes(const std::string& path, double offset)
 {
   std::ifstream in(path);
   std::vector<double> times;
@@ -210,6 +257,10 @@ std::vector<double> readTimes(const std::string& path)
     double t;
     if (!(fields >> t) || !std::isfinite(t) || t < 0.0)
       throw std::runtime_error(path + ":" + std::to_string(number) + ": '" + line + "' is not a time in seconds >= 0");
+    if (offset + t >= 4294967296.0)
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": time " + std::to_string(t) +
+                               " s plus --time-offset " + std::to_string(offset) +
+                               " s is past the largest ROS time (2^32 s)");
     if (!times.empty() && t < times.back())
       throw std::runtime_error(path + ":" + std::to_string(number) + ": time " + std::to_string(t) +
                                " goes backwards (previous " + std::to_string(times.back()) + ")");
@@ -219,11 +270,12 @@ std::vector<double> readTimes(const std::string& path)
 }
 
 // Rows of 12 numbers: camera-0 pose of each frame in the first camera-0 frame, row-major [R | t].
-std::vector<Projection> readPoses(const std::string& path)
+// `lines` gets the line number of each pose, for errors found later.
+std::vector<Projection> readPoses(const std::string& path, std::vector<int>& lines)
 {
   std::ifstream in(path);
-  if (!in)
-    throw std::runtime_error("cannot read poses file " + path);
+  if (!in || !isFile(path))
+    throw std::runtime_error("cannot read poses file " + path + " (expected a regular file)");
   std::vector<Projection> poses;
   std::string line;
   int number = 0;
@@ -237,7 +289,11 @@ std::vector<Projection> readPoses(const std::string& path)
     for (double& v : p)
       if (!(fields >> v))
         throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 12 numbers (a 3x4 pose [R|t])");
+    const std::string problem = poseProblem(p);
+    if (!problem.empty())
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": the pose " + problem);
     poses.push_back(p);
+    lines.push_back(number);
   }
   return poses;
 }
@@ -354,6 +410,13 @@ ros::Time stampOf(double seconds)
   return t;
 }
 
+// The bag is written beside --output under this name and renamed over it only when complete, so a failed
+// run leaves an existing bag as it was.
+std::string temporaryBagPath(const std::string& output)
+{
+  return output + ".tmp." + std::to_string(::getpid());
+}
+
 int run(const Options& o, bool& bag_opened)
 {
   // ---- Check the folder before writing anything: say everything that is missing at once.
@@ -388,7 +451,7 @@ int run(const Options& o, bool& bag_opened)
       throw std::runtime_error(dir + "calib.txt has no " + key +
                                " (expected lines 'P0: ...' to 'P3: ...' with 12 numbers)");
 
-  const auto times = readTimes(dir + "times.txt");
+  const auto times = readTimes(dir + "times.txt", o.time_offset);
   const auto left_images = listImages(dir + left_dir);
   if (left_images.empty())
     throw std::runtime_error(dir + left_dir + "/ has no NNNNNN.png images");
@@ -432,9 +495,10 @@ int run(const Options& o, bool& bag_opened)
     throw std::runtime_error("empty frame range " + std::to_string(first) + ".." + std::to_string(last));
 
   std::vector<Projection> poses;
+  std::vector<int> pose_lines;
   if (!o.poses.empty())
   {
-    poses = readPoses(o.poses);
+    poses = readPoses(o.poses, pose_lines);
     if (static_cast<long>(poses.size()) <= last)
       throw std::runtime_error("pose/frame count mismatch: " + o.poses + " has " + std::to_string(poses.size()) +
                                " poses, frame " + std::to_string(last) + " needs at least " + std::to_string(last + 1));
@@ -466,8 +530,8 @@ int run(const Options& o, bool& bag_opened)
   rosbag::Bag bag;
   try
   {
-    bag.open(o.output, rosbag::bagmode::Write);
-    bag_opened = true;
+    bag_opened = true;  // from here on a partial temporary file may exist
+    bag.open(temporaryBagPath(o.output), rosbag::bagmode::Write);
   }
   catch (const rosbag::BagException& e)
   {
@@ -563,6 +627,11 @@ int run(const Options& o, bool& bag_opened)
       t.transform.translation.y = odom_T_left.t[1];
       t.transform.translation.z = odom_T_left.t[2];
       t.transform.rotation = toQuaternion(odom_T_left.r);
+      // Checked poses give finite transforms unless their numbers are near the double range.
+      const auto& q = t.transform.rotation;
+      if (!std::isfinite(odom_T_left.t[0] + odom_T_left.t[1] + odom_T_left.t[2] + q.x + q.y + q.z + q.w))
+        throw std::runtime_error(o.poses + ":" + std::to_string(pose_lines[k]) + ": the pose of frame " +
+                                 std::to_string(k) + " gives a non-finite transform (numbers too large?)");
       tf2_msgs::TFMessage tf;
       tf.transforms.push_back(t);
       bag.write("/tf", stamp, tf);
@@ -586,6 +655,8 @@ int run(const Options& o, bool& bag_opened)
     }
   }
   bag.close();
+  if (std::rename(temporaryBagPath(o.output).c_str(), o.output.c_str()) != 0)
+    throw std::runtime_error("cannot move the new bag into place at " + o.output + ": " + std::strerror(errno));
   std::cerr << "kitti_to_bag: wrote " << o.output << ": " << written << (o.stereo ? " stereo" : " mono") << " frames "
             << first << ".." << last << ", " << size.width << "x" << size.height << (o.color ? " bgr8" : " mono8")
             << (poses.empty() ? "" : ", /tf and /kitti/odom from " + o.poses) << "\n";
@@ -617,7 +688,7 @@ int main(int argc, char** argv)
   {
     std::cerr << "kitti_to_bag: error: " << e.what() << "\n";
     if (bag_opened)
-      std::remove(options.output.c_str());  // no half-written bag left behind
+      std::remove(temporaryBagPath(options.output).c_str());  // no half-written bag; --output untouched
     return 1;
   }
 }

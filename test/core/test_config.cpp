@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 
 #include "openable/config.h"
 #include "openable/error.h"
@@ -121,4 +122,87 @@ TEST(Config, AlphaFromPeakWavelengthsReproducesKittiValue)
   // Paper: PointGrey Flea2 with peaks at 610, 535 and 470 nm gives alpha = 0.47.
   EXPECT_NEAR(alphaFromWavelengths(610, 535, 470), 0.4706, 1e-4);
   EXPECT_THROW(alphaFromWavelengths(0, 535, 470), Error);
+}
+
+// Issue 9 (hardening): inputs that used to run silently with defaults, escape as yaml-cpp exceptions or
+// print wrapped numbers.
+namespace
+{
+std::string errorOf(const std::function<void()>& action)
+{
+  try
+  {
+    action();
+  }
+  catch (const Error& e)
+  {
+    return e.what();
+  }
+  return "(no openable::Error)";
+}
+
+std::string writeTemp(const std::string& name, const std::string& text)
+{
+  const std::string path = testing::TempDir() + "/openable_test_config_" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+}  // namespace
+
+TEST(ConfigHardening, FolderAsConfigFileIsAnErrorNotTheDefaults)
+{
+  const std::string folder = testing::TempDir();
+  const std::string message = errorOf([&] { Config::fromYamlFile(folder); });
+  EXPECT_NE(message.find(folder), std::string::npos) << message;
+  EXPECT_NE(message.find("is a folder"), std::string::npos) << message;
+}
+
+TEST(ConfigHardening, ListOrMappingValueNamesFileAndKey)
+{
+  const std::string list = writeTemp("list.yaml", "patch_size: 64\nsequence_length: [1, 2]\n");
+  std::string message = errorOf([&] { Config::fromYamlFile(list); });
+  EXPECT_NE(message.find(list), std::string::npos) << message;
+  EXPECT_NE(message.find("sequence_length"), std::string::npos) << message;
+  EXPECT_NE(message.find("expected a single value"), std::string::npos) << message;
+
+  const std::string mapping = writeTemp("map.yaml", "descriptor:\n  name: LDB\n");
+  message = errorOf([&] { Config::fromYamlFile(mapping); });
+  EXPECT_NE(message.find(mapping), std::string::npos) << message;
+  EXPECT_NE(message.find("descriptor"), std::string::npos) << message;
+}
+
+TEST(ConfigHardening, ListAsKeyIsAnOpenableError)
+{
+  // What a corrupt map's stored configuration held (test/data/repro/config_seqkey.map): a complex key.
+  const std::string message = errorOf([] { Config::fromYamlString("? [a, b]\n: 1\n"); });
+  EXPECT_NE(message.find("[a, b]"), std::string::npos) << message;
+  EXPECT_NE(message.find("expected a key name"), std::string::npos) << message;
+}
+
+TEST(ConfigHardening, HistoryBoundMessageDoesNotWrap)
+{
+  Config c;
+  c.max_history = 1000;
+  c.exclusion_window = 2147483647;
+  EXPECT_TRUE(anyErrorMentions(c.validate(), "max_history", "= 4294967296")) << ::testing::PrintToString(c.validate());
+  c.exclusion_window = 50;
+  c.sequence_length = 2147483647;
+  EXPECT_TRUE(anyErrorMentions(c.validate(), "max_history", "= 4294967394")) << ::testing::PrintToString(c.validate());
+}
+
+TEST(ConfigHardening, AbsurdMemoryPerFrameIsRefusedWithTheFigure)
+{
+  Config c;
+  c.description_type = "grid";
+  c.grid_x = 64;
+  c.grid_y = 64;
+  c.patch_size = 1024;
+  // 4096 cells of 1024 x 1024 pixels at 16 bytes each: 64 GiB per frame.
+  EXPECT_TRUE(anyErrorMentions(c.validate(), "68719476736 bytes per frame", "patch_size"))
+      << ::testing::PrintToString(c.validate());
+  // A 64x64 grid of 128 px patches is the largest that fits the 1 GiB bound.
+  c.patch_size = 128;
+  EXPECT_TRUE(c.validate().empty()) << ::testing::PrintToString(c.validate());
+  c.patch_size = 129;
+  EXPECT_FALSE(c.validate().empty());
 }

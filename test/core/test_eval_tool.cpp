@@ -361,3 +361,22 @@ TEST_F(EvalToolTest, HelpDocumentsEveryOption)
     EXPECT_NE(r.out.find(option), std::string::npos) << option;
   }
 }
+
+// Issue 9 (hardening): numbers at the edge of int give the right answer or a one-line error.
+TEST_F(EvalToolTest, HugeToleranceMatchesEverythingInsteadOfWrapping)
+{
+  // Every reference is within 2^31 - 1 frames of every query: each query's best match is correct.
+  const ToolRun r = run("--matrix '" + path("m.npy") + "' --tolerance 2147483647 --output '" + path("out") + "'");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("recall_at_1: 1\n"), std::string::npos) << r.out;
+}
+
+TEST_F(EvalToolTest, PairBeyondTheMatrixIsAOneLineErrorNotBadAlloc)
+{
+  const std::string pairs = OPENABLE_SOURCE_DIR "/test/data/repro/p_2147483646.txt";  // "5 5", "2147483646 0"
+  const ToolRun r = run("--matrix '" + path("m.npy") + "' --pairs '" + pairs + "' --output '" + path("out") + "'");
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("needs at least 2147483647x6"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("bad_alloc"), std::string::npos) << r.err;
+}

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "openable/error.h"
+#include "memory_limit.h"
 #include "openable/evaluation.h"
 
 namespace fs = std::filesystem;
@@ -653,4 +654,28 @@ TEST(EvaluationOutput, PlotHasTheCurveInItsColourWhereItShouldBe)
             cv::Size(640, 480));
   expectError([] { openable::drawPrCurves({}, "none"); }, "no curve");
   expectError([&] { openable::drawPrCurves({{"a", perfect}}, "t", cv::Size(100, 100)); }, "too small");
+}
+
+// Issue 9 (hardening): a pairs file's indices cost memory by the pairs it holds, not by their value, and
+// are checked against the matrix shape.
+TEST(GroundTruthHardening, FarPairCostsOneEntryAndIsRefusedByTheShapeCheck)
+{
+  TempDir dir;
+  const std::string path = dir.file("far.txt", "50000000 0\n");
+  const auto run = openable_test::runWithMemoryLimit(
+      128 << 20,
+      [&]
+      {
+        openable::loadPairsGroundTruth(path).checkFits(4, 4);
+      });
+  EXPECT_EQ(run.outcome, openable_test::LimitedRun::kOpenableError) << run.message;
+  EXPECT_NE(run.message.find("needs at least 50000001x1"), std::string::npos) << run.message;
+}
+
+TEST(GroundTruthHardening, ToleranceNearIntMaxDoesNotWrap)
+{
+  const GroundTruth truth = openable::alignedGroundTruth(4, 4, 2147483647);
+  for (int q = 0; q < 4; ++q)
+    for (int r = 0; r < 4; ++r)
+      EXPECT_TRUE(truth.isMatch(q, r)) << q << " " << r;
 }
