@@ -94,7 +94,7 @@ TrajectoryPlot::TrajectoryPlot(std::vector<cv::Vec3d> positions, cv::Size size)
   const double scale = std::min(size.width / 1000.0, size.height / 800.0);
   text_scale_ = std::max(0.35, 0.55 * scale);
   const int left = static_cast<int>(std::lround(90 * std::max(scale, 0.6)));
-  const int bottom = static_cast<int>(std::lround(65 * std::max(scale, 0.6)));
+  const int bottom = static_cast<int>(std::lround(75 * std::max(scale, 0.6)));
   const int top = static_cast<int>(std::lround(50 * std::max(scale, 0.6)));
   const int right = static_cast<int>(std::lround(25 * std::max(scale, 0.6)));
   area_ = cv::Rect(left, top, size.width - left - right, size.height - top - bottom);
