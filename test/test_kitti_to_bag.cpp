@@ -346,8 +346,7 @@ TEST_F(KittiToBag, ProgressLineAndQuiet)
   EXPECT_NE(loud.output.find("kitti_to_bag: 10/10 frames (100%), "), std::string::npos) << loud.output;
   EXPECT_NE(loud.output.find(" frames/s"), std::string::npos) << loud.output;
   EXPECT_EQ(loud.output.find('\r'), std::string::npos) << loud.output;
-  const ToolRun quiet =
-      run("--sequence " + kSequence + " --output " + dir_ + "/quiet.bag --first 0 --last 9 --quiet");
+  const ToolRun quiet = run("--sequence " + kSequence + " --output " + dir_ + "/quiet.bag --first 0 --last 9 --quiet");
   ASSERT_EQ(quiet.status, 0) << quiet.output;
   EXPECT_EQ(quiet.output.find("/10 frames"), std::string::npos) << quiet.output;
   EXPECT_EQ(quiet.output.find("wrote"), std::string::npos) << quiet.output;

@@ -21,9 +21,9 @@ public:
 
   struct Options
   {
-    std::string label;           ///< what runs, e.g. the tool's name ("kitti_to_bag")
+    std::string label;            ///< what runs, e.g. the tool's name ("kitti_to_bag")
     std::string unit = "frames";  ///< what is counted
-    size_t total = 0;            ///< 0 = unknown (no percentage, no time left)
+    size_t total = 0;             ///< 0 = unknown (no percentage, no time left)
     bool quiet = false;
     bool terminal = false;  ///< '\r' updates instead of plain lines
     double interval = 5.0;  ///< s between plain lines

@@ -44,8 +44,8 @@ private:
 
   std::vector<cv::Vec3d> positions_;
   cv::Size size_;
-  cv::Rect area_;       ///< the plot area inside the margins
-  double text_scale_;   ///< font scale that grows with the image
+  cv::Rect area_;                         ///< the plot area inside the margins
+  double text_scale_;                     ///< font scale that grows with the image
   double x_min_, z_min_, x_max_, z_max_;  ///< metres shown
   double pixels_per_metre_;
   double tick_;

@@ -130,8 +130,8 @@ std::string trajectoryCsv(const std::vector<cv::Vec3d>& positions, const std::ve
                           const std::vector<LoopPair>& loops)
 {
   if (!stamps.empty() && stamps.size() != positions.size())
-    throw Error("trajectory CSV: " + std::to_string(stamps.size()) + " stamps for " +
-                std::to_string(positions.size()) + " positions (expected one per frame)");
+    throw Error("trajectory CSV: " + std::to_string(stamps.size()) + " stamps for " + std::to_string(positions.size()) +
+                " positions (expected one per frame)");
   // First loop each frame closes as the query.
   std::vector<const LoopPair*> partner(positions.size(), nullptr);
   for (const LoopPair& loop : loops)

@@ -53,8 +53,9 @@ void putVerticalText(cv::Mat& image, const std::string& text, cv::Point centre, 
                           cv::Rect(0, 0, image.cols, image.rows);
   cv::Mat roi = image(target);
   // Dark text over whatever is there: the darker of both.
-  cv::min(roi, label(cv::Rect(target.x - (centre.x - label.cols / 2), target.y - (centre.y - label.rows / 2),
-                              target.width, target.height)),
+  cv::min(roi,
+          label(cv::Rect(target.x - (centre.x - label.cols / 2), target.y - (centre.y - label.rows / 2), target.width,
+                         target.height)),
           roi);
 }
 }  // namespace

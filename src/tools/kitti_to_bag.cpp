@@ -591,8 +591,8 @@ int run(const Options& o, bool& bag_opened)
   bag.close();
   if (!o.quiet)
     std::cerr << "kitti_to_bag: wrote " << o.output << ": " << written << (o.stereo ? " stereo" : " mono") << " frames "
-            << first << ".." << last << ", " << size.width << "x" << size.height << (o.color ? " bgr8" : " mono8")
-            << (poses.empty() ? "" : ", /tf and /kitti/odom from " + o.poses) << "\n";
+              << first << ".." << last << ", " << size.width << "x" << size.height << (o.color ? " bgr8" : " mono8")
+              << (poses.empty() ? "" : ", /tf and /kitti/odom from " + o.poses) << "\n";
   return 0;
 }
 }  // namespace

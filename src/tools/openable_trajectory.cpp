@@ -201,9 +201,8 @@ int run(const Options& o)
   std::vector<cv::Vec3d> positions;
   if (!o.poses.empty())
     positions = openable::loadKittiPositions(o.poses);
-  const openable::GroundTruth truth = o.pairs.empty()
-                                          ? openable::posesGroundTruth(positions, o.distance, o.exclusion)
-                                          : openable::loadPairsGroundTruth(o.pairs, o.pair_tolerance);
+  const openable::GroundTruth truth = o.pairs.empty() ? openable::posesGroundTruth(positions, o.distance, o.exclusion)
+                                                      : openable::loadPairsGroundTruth(o.pairs, o.pair_tolerance);
   openable::judgeLoops(loops, truth);
   size_t agreeing = 0;
   for (const auto& loop : loops)
@@ -236,8 +235,8 @@ int run(const Options& o)
     size_t skipped = 0;
     const std::string kml = openable::trajectoryKml(openable::loadGeoPositions(o.geo), loops, title, &skipped);
     if (skipped > 0)
-      std::cerr << "openable_trajectory: " << skipped << " loops name a frame without geographic position in '"
-                << o.geo << "'; left out of the KML\n";
+      std::cerr << "openable_trajectory: " << skipped << " loops name a frame without geographic position in '" << o.geo
+                << "'; left out of the KML\n";
     writeText(fs::path(o.output) / "trajectory.kml", kml);
   }
   return 0;

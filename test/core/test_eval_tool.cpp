@@ -366,8 +366,8 @@ TEST_F(EvalToolTest, HelpDocumentsEveryOption)
 // unless --quiet; the results on stdout are the same either way.
 TEST_F(EvalToolTest, SweepShowsProgressUnlessQuiet)
 {
-  const std::string args = "--poses " + kKitti + "/poses/06.txt --compare " + kKitti +
-                           "/loop_ground_truth/kitti06GroundTruth.txt --sweep";
+  const std::string args =
+      "--poses " + kKitti + "/poses/06.txt --compare " + kKitti + "/loop_ground_truth/kitti06GroundTruth.txt --sweep";
   const ToolRun loud = run(args);
   ASSERT_EQ(loud.status, 0) << loud.err;
   EXPECT_NE(loud.err.find("openable_eval: sweep: 390/390 settings (100%), "), std::string::npos) << loud.err;

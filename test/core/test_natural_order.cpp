@@ -63,8 +63,9 @@ TEST(NaturalOrder, SortsUnpaddedAndPaddedNamesAsPeopleNameThem)
 
 TEST(NaturalOrder, IsAStrictWeakOrdering)
 {
-  const std::vector<std::string> names = {"a", "A", "a1", "a01", "a001", "a2", "a10", "b", "B1", "b01", "", "1", "01",
-                                          "x1y2", "x1y10", "x01y2", "x.png", "x_1.png", "Image007.jpg", "image7.jpg"};
+  const std::vector<std::string> names = {
+      "a", "A", "a1", "a01",  "a001",  "a2",    "a10",   "b",       "B1",           "b01",
+      "",  "1", "01", "x1y2", "x1y10", "x01y2", "x.png", "x_1.png", "Image007.jpg", "image7.jpg"};
   for (const auto& a : names)
   {
     EXPECT_FALSE(naturalLess(a, a)) << a;

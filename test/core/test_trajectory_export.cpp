@@ -77,17 +77,18 @@ TEST(TrajectoryExport, CsvHasOneLinePerFrameWithItsLoopPartner)
 
 TEST(TrajectoryExport, GeoPositionsFromCsv)
 {
-  const auto p = openable::loadGeoPositions(writeFile(
-      "geo.csv", "frame,stamp,latitude,longitude,altitude\n0,1.5,36.8381,-2.4597,12\r\n\n2,1.7,36.8382,-2.4598,12.5\n"));
+  const auto p = openable::loadGeoPositions(
+      writeFile("geo.csv",
+                "frame,stamp,latitude,longitude,altitude\n0,1.5,36.8381,-2.4597,12\r\n\n2,1.7,36.8382,-2.4598,12.5\n"));
   ASSERT_EQ(p.size(), 2u);
   EXPECT_DOUBLE_EQ(p.at(2).latitude, 36.8382);
   EXPECT_DOUBLE_EQ(p.at(2).longitude, -2.4598);
   EXPECT_DOUBLE_EQ(p.at(2).altitude, 12.5);
   EXPECT_DOUBLE_EQ(p.at(0).stamp, 1.5);
   const std::string header = "frame,stamp,latitude,longitude,altitude\n";
-  for (const std::string& bad : {std::string("frame,lat,lon\n0,1,2\n"), header + "0,1,95,2,3\n",
-                                 header + "0,1,36,190,3\n", header + "0,1,36,2\n", header + "1.5,1,36,2,3\n",
-                                 header + "0,1,36,2,3\n0,2,36,2,3\n", std::string("")})
+  for (const std::string& bad :
+       {std::string("frame,lat,lon\n0,1,2\n"), header + "0,1,95,2,3\n", header + "0,1,36,190,3\n",
+        header + "0,1,36,2\n", header + "1.5,1,36,2,3\n", header + "0,1,36,2,3\n0,2,36,2,3\n", std::string("")})
     EXPECT_THROW(openable::loadGeoPositions(writeFile("bad.csv", bad)), openable::Error) << bad;
   EXPECT_THROW(openable::loadGeoPositions("/nonexistent/geo.csv"), openable::Error);
 }

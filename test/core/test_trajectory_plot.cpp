@@ -105,7 +105,8 @@ TEST(TrajectoryPlot, Kitti06LoopsWhereTheSequenceRevisitsItsStart)
   // apart on the map). The published pairs mostly agree with the ground truth from the poses (6 m, 100
   // frames, as openable_eval makes it); the picture is judged against the published pairs themselves.
   const std::string published_file = openable_test::sharedData("kitti/loop_ground_truth/kitti06GroundTruth.txt");
-  const std::vector<cv::Vec3d> positions = openable::loadKittiPositions(openable_test::sharedData("kitti/poses/06.txt"));
+  const std::vector<cv::Vec3d> positions =
+      openable::loadKittiPositions(openable_test::sharedData("kitti/poses/06.txt"));
   ASSERT_EQ(positions.size(), 1101u);
   std::vector<LoopPair> loops = openable::loadLoopPairs(published_file);
   ASSERT_GT(loops.size(), 3000u);

@@ -87,9 +87,9 @@ TEST_F(TrajectoryToolTest, Kitti06PublishedLoopsGreenAndWrongOnesRed)
   }
   csv << "450,120,0.2\n550,15,0.2\n1000,400,0.2\n";
   csv.close();
-  const ToolRun r = run("--poses " + kPoses + " --loops " + path("loop_closures.csv") + " --pairs " + kTruth +
-                        " --times " + openable_test::sharedData("kitti/times_06.txt") + " --output " + path("out") +
-                        " --title 'KITTI 06'");
+  const ToolRun r =
+      run("--poses " + kPoses + " --loops " + path("loop_closures.csv") + " --pairs " + kTruth + " --times " +
+          openable_test::sharedData("kitti/times_06.txt") + " --output " + path("out") + " --title 'KITTI 06'");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("loops: " + std::to_string(published + 3)), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("agree with the ground truth: " + std::to_string(published)), std::string::npos) << r.out;
@@ -115,9 +115,9 @@ TEST_F(TrajectoryToolTest, Kitti06PublishedLoopsGreenAndWrongOnesRed)
   const size_t line_829 = table.find("\n829,");
   ASSERT_NE(line_829, std::string::npos);
   const std::string row = table.substr(line_829 + 1, table.find('\n', line_829 + 1) - line_829 - 1);
-  EXPECT_EQ(row.substr(row.size() - 4), ",0,1") << row;  // 829 closes the loop on frame 0, agreeing
+  EXPECT_EQ(row.substr(row.size() - 4), ",0,1") << row;   // 829 closes the loop on frame 0, agreeing
   EXPECT_EQ(row.substr(0, 14), "829,86.146690,") << row;  // its stamp from times_06.txt
-  EXPECT_FALSE(fs::exists(path("out/trajectory.kml")));  // no --geo
+  EXPECT_FALSE(fs::exists(path("out/trajectory.kml")));   // no --geo
 }
 
 TEST_F(TrajectoryToolTest, KmlFromGeographicPositions)
@@ -128,9 +128,8 @@ TEST_F(TrajectoryToolTest, KmlFromGeographicPositions)
                                     "4,4.0,36.83811,-2.45969,12\n";
   std::ofstream(path("loops.txt")) << "4 0\n3 1\n";
   std::ofstream(path("truth.txt")) << "4 0\n";
-  const ToolRun r =
-      run("--geo " + path("geo.csv") + " --loops " + path("loops.txt") + " --pairs " + path("truth.txt") +
-          " --output " + path("out"));
+  const ToolRun r = run("--geo " + path("geo.csv") + " --loops " + path("loops.txt") + " --pairs " + path("truth.txt") +
+                        " --output " + path("out"));
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_FALSE(fs::exists(path("out/trajectory.png")));  // no --poses
   const std::string command = std::string(PYTHON3_EXECUTABLE) + " '" + OPENABLE_SOURCE_DIR +
@@ -151,8 +150,7 @@ TEST_F(TrajectoryToolTest, BadInputGivesOneLineReason)
       {"", 2, ""},
       {"--poses " + kPoses + " --output " + path("o"), 2, "--loops and --output are required"},
       {"--loops " + kTruth + " --output " + path("o"), 2, "--poses"},
-      {"--poses " + kPoses + " --loops " + kTruth + " --output " + path("o") + " --pairs " + kTruth +
-           " --distance 5",
+      {"--poses " + kPoses + " --loops " + kTruth + " --output " + path("o") + " --pairs " + kTruth + " --distance 5",
        2, "not both"},
       {"--poses " + kPoses + " --loops /nonexistent.csv --output " + path("o"), 1, "/nonexistent.csv"},
       {"--poses " + kPoses + " --loops " + path("far.txt") + " --output " + path("o"), 1, "frame 5000"},

@@ -77,7 +77,7 @@ inline EurocCamera loadEurocCamera(const std::string& path)
 /// camera_info of the left and right raw cameras of a rectified stereo pair (plumb_bob distortion, R and
 /// P from cv::stereoRectify; the right P carries -fx * baseline as ROS expects).
 inline std::array<sensor_msgs::CameraInfo, 2> eurocStereoInfo(const EurocCamera& left, const EurocCamera& right,
-                                                             const cv::Size& size)
+                                                              const cv::Size& size)
 {
   // stereoRectify wants p_right = R p_left + T.
   const cv::Matx44d right_T_left = right.body_T_camera.inv() * left.body_T_camera;

@@ -103,9 +103,9 @@ TEST(StereoImageProc, DisparityOfStereoImageProcFeedsTheDetector)
   ros::WallDuration(1.0).sleep();
 
   const cv::Size size(752, 480);
-  const auto infos = openable_ros_test::eurocStereoInfo(
-      openable_ros_test::loadEurocCamera(revisits + "/sensorLeft.yaml"),
-      openable_ros_test::loadEurocCamera(revisits + "/sensorRight.yaml"), size);
+  const auto infos =
+      openable_ros_test::eurocStereoInfo(openable_ros_test::loadEurocCamera(revisits + "/sensorLeft.yaml"),
+                                         openable_ros_test::loadEurocCamera(revisits + "/sensorRight.yaml"), size);
 
   std::vector<Pair> stream = microPairs(stereo + "/euroc_v101_micro", 5, 8);
   ASSERT_EQ(stream.size(), 5u);
