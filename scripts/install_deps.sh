@@ -14,6 +14,8 @@ packages=(
   libsensor-msgs-dev libstereo-msgs-dev libnav-msgs-dev libvisualization-msgs-dev libdiagnostic-msgs-dev
   libgeometry-msgs-dev libstd-srvs-dev libtf2-msgs-dev libdiagnostic-updater-dev
   libopencv-dev libyaml-cpp-dev libeigen3-dev libceres-dev libgtest-dev libbenchmark-dev
+  # stereo_image_proc for the rostest of the disparity pipeline (issue 13); -dev holds its package.xml
+  ros-stereo-image-proc libstereo-image-proc-dev
 )
 
 missing=()

@@ -434,6 +434,21 @@ TEST_F(KittiToBag, StampPastTwoToThe32SecondsIsRefusedNamingTheFile)
   EXPECT_NE(r.output.find("largest ROS time"), std::string::npos) << r.output;
 }
 
+TEST_F(KittiToBag, ProgressLineAndQuiet)
+{
+  // Not a terminal here: plain progress lines, the last one with the rate; --quiet prints nothing.
+  const ToolRun loud = run("--sequence " + kSequence + " --output " + dir_ + "/loud.bag --first 0 --last 9");
+  ASSERT_EQ(loud.status, 0) << loud.output;
+  EXPECT_NE(loud.output.find("kitti_to_bag: 10/10 frames (100%), "), std::string::npos) << loud.output;
+  EXPECT_NE(loud.output.find(" frames/s"), std::string::npos) << loud.output;
+  EXPECT_EQ(loud.output.find('\r'), std::string::npos) << loud.output;
+  const ToolRun quiet = run("--sequence " + kSequence + " --output " + dir_ + "/quiet.bag --first 0 --last 9 --quiet");
+  ASSERT_EQ(quiet.status, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("/10 frames"), std::string::npos) << quiet.output;
+  EXPECT_EQ(quiet.output.find("wrote"), std::string::npos) << quiet.output;
+  EXPECT_TRUE(fs::exists(dir_ + "/quiet.bag"));
+}
+
 }  // namespace
 
 int main(int argc, char** argv)

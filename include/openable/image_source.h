@@ -7,8 +7,8 @@
 
 namespace openable
 {
-/// A sequence of images from a folder (png / jpg / jpeg / bmp / ppm / pgm, sorted by file name) or a
-/// video file.
+/// A sequence of images from a folder (png / jpg / jpeg / bmp / ppm / pgm, in natural order of file name:
+/// numbers compare as numbers, so `image2.png` comes before `image10.png`; see naturalLess) or a video file.
 class ImageSource
 {
 public:
@@ -29,10 +29,20 @@ public:
   /// and skips it.
   bool next(cv::Mat& image, std::string& name);
 
-  /// Image file names of a folder, sorted (empty for a video).
+  /// Image file names of a folder, in reading order (empty for a video).
   const std::vector<std::string>& files() const
   {
     return files_;
+  }
+  /// The first and last file name of a folder, so a tool can show which frames it reads and the user sees
+  /// at once when the order is not the intended one ("" for a video).
+  std::string firstFile() const
+  {
+    return files_.empty() ? std::string() : files_.front();
+  }
+  std::string lastFile() const
+  {
+    return files_.empty() ? std::string() : files_.back();
   }
 
 private:

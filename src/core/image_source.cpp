@@ -12,6 +12,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "openable/error.h"
+#include "openable/natural_order.h"
 
 namespace fs = std::filesystem;
 
@@ -58,7 +59,8 @@ ImageSource::ImageSource(const std::string& path) : path_(path)
     for (const auto& entry : fs::directory_iterator(path, ec))
       if (entry.is_regular_file() && isImageFile(entry.path()))
         files_.push_back(entry.path().filename().string());
-    std::sort(files_.begin(), files_.end());
+    // Natural order: `1.jpg, 2.jpg, ... 10.jpg` as named, not 1, 10, 11, ... 2 (plain string order).
+    std::sort(files_.begin(), files_.end(), naturalLess);
     if (files_.empty())
       throw Error("folder '" + path + "' holds no images (.png .jpg .jpeg .bmp .ppm .pgm)");
     return;

@@ -1,7 +1,7 @@
 // kitti_to_bag: a KITTI odometry sequence folder -> a rosbag ready for `rosbag play` beside the detector.
 //
 //   kitti_to_bag --sequence DIR --output FILE.bag [--poses FILE] [--stereo] [--color]
-//                [--first N] [--last M] [--compression none|bz2|lz4] [--time-offset SEC]
+//                [--first N] [--last M] [--compression none|bz2|lz4] [--time-offset SEC] [--quiet]
 //
 // What it writes (doc/kitti.md has the full description):
 //   /kitti/left/image_rect, /kitti/left/camera_info      sensor_msgs, frame camera_left
@@ -44,11 +44,13 @@
 #include <string>
 #include <vector>
 
+#include "openable/progress.h"
+
 namespace
 {
 const char* const kUsage =
     "usage: kitti_to_bag --sequence DIR --output FILE.bag [--poses FILE] [--stereo] [--color]\n"
-    "                    [--first N] [--last M] [--compression none|bz2|lz4] [--time-offset SEC]\n"
+    "                    [--first N] [--last M] [--compression none|bz2|lz4] [--time-offset SEC] [--quiet]\n"
     "  --sequence DIR     KITTI odometry sequence folder: calib.txt, times.txt, image_0/ (and image_1/ with\n"
     "                     --stereo), or image_2/ (and image_3/) with --color\n"
     "  --output FILE.bag  bag to write (replaced only when the conversion succeeds)\n"
@@ -57,7 +59,8 @@ const char* const kUsage =
     "  --color            colour cameras 2 and 3 (bgr8) instead of grey cameras 0 and 1 (mono8)\n"
     "  --first N --last M frame range, inclusive (default: every frame with an image)\n"
     "  --compression C    bag chunk compression: none (default), bz2, lz4\n"
-    "  --time-offset SEC  added to times.txt (default 1000000000: valid, non-zero ROS times)\n";
+    "  --time-offset SEC  added to times.txt (default 1000000000: valid, non-zero ROS times)\n"
+    "  --quiet            no progress (frames done, frames/s, time left) and no summary on stderr\n";
 
 class UsageError : public std::runtime_error
 {
@@ -76,6 +79,7 @@ struct Options
   long last = -1;
   std::string compression = "none";
   double time_offset = 1e9;
+  bool quiet = false;
 };
 
 long parseLong(const std::string& flag, const std::string& text)
@@ -124,6 +128,8 @@ Options parseArguments(int argc, char** argv)
       if (end == text.c_str() || *end != '\0' || !(o.time_offset >= 0.0) || o.time_offset > 4e9)
         throw UsageError("--time-offset: '" + text + "', expected seconds in [0, 4e9]");
     }
+    else if (arg == "--quiet")
+      o.quiet = true;
     else if (arg == "-h" || arg == "--help")
       throw UsageError("");
     else
@@ -545,7 +551,8 @@ int run(const Options& o, bool& bag_opened)
   std::string size_source;
   const long count = last - first + 1;
   long written = 0;
-  int last_percent = -1;
+  // A whole sequence takes minutes: one updating line on a terminal, a line every few seconds in a log.
+  openable::Progress progress("kitti_to_bag", static_cast<size_t>(count), o.quiet);
   for (long k = first; k <= last; ++k)
   {
     const ros::Time stamp = stampOf(o.time_offset + times[k]);
@@ -647,19 +654,16 @@ int run(const Options& o, bool& bag_opened)
     }
 
     ++written;
-    const int percent = static_cast<int>(100 * written / count);
-    if (percent / 10 != last_percent / 10 || written == count)
-    {
-      std::cerr << "kitti_to_bag: " << written << "/" << count << " frames (" << percent << "%)\n";
-      last_percent = percent;
-    }
+    progress.update(static_cast<size_t>(written));
   }
+  progress.finish();
   bag.close();
   if (std::rename(temporaryBagPath(o.output).c_str(), o.output.c_str()) != 0)
     throw std::runtime_error("cannot move the new bag into place at " + o.output + ": " + std::strerror(errno));
-  std::cerr << "kitti_to_bag: wrote " << o.output << ": " << written << (o.stereo ? " stereo" : " mono") << " frames "
-            << first << ".." << last << ", " << size.width << "x" << size.height << (o.color ? " bgr8" : " mono8")
-            << (poses.empty() ? "" : ", /tf and /kitti/odom from " + o.poses) << "\n";
+  if (!o.quiet)
+    std::cerr << "kitti_to_bag: wrote " << o.output << ": " << written << (o.stereo ? " stereo" : " mono") << " frames "
+              << first << ".." << last << ", " << size.width << "x" << size.height << (o.color ? " bgr8" : " mono8")
+              << (poses.empty() ? "" : ", /tf and /kitti/odom from " + o.poses) << "\n";
   return 0;
 }
 }  // namespace

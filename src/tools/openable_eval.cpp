@@ -17,6 +17,7 @@
 #include "openable/ground_truth_sources.h"
 #include "openable/image_source.h"
 #include "openable/npy.h"
+#include "openable/progress.h"
 #include "openable/published_scoring.h"
 
 namespace
@@ -32,7 +33,7 @@ Usage:
                  | --joined N [--tolerance T] | --truth-matrix PATH)
                 --output DIR [--title TEXT]
   openable_eval --published FILE [--decisions FILE] [--frames M] (ground truth as above) --output DIR
-  openable_eval --poses FILE --compare FILE [--distance D] [--exclusion E] [--sweep]
+  openable_eval --poses FILE --compare FILE [--distance D] [--exclusion E] [--sweep] [--quiet]
 
 Distance matrix:
   --matrix PATH        distance_matrix.npy (float32 or float64, 2-D, rows = queries, columns = references),
@@ -100,6 +101,8 @@ Ground-truth comparison:
   --compare FILE       with --poses: compare the loops from the poses with a pairs file (pair precision,
                        recall, intersection over union, and the same for queries with any loop).
   --sweep              with --compare: try a grid of D and E and print the best by intersection over union.
+                       Shows its progress on stderr (settings done, per second, time left).
+  --quiet              no progress on stderr.
 
 Exit status: 0 on success, 1 with a one-line reason on stderr for bad input, 2 for bad usage.
 )";
@@ -130,6 +133,7 @@ struct Options
   std::string title = "Precision-recall";
   std::string compare;
   bool sweep = false;
+  bool quiet = false;
   bool help = false;
 };
 
@@ -231,6 +235,8 @@ Options parseArguments(int argc, char** argv)
       o.compare = takeValue(argc, argv, i);
     else if (flag == "--sweep")
       o.sweep = true;
+    else if (flag == "--quiet")
+      o.quiet = true;
     else
       throw UsageError("unknown argument '" + flag + "' (see --help)");
   }
@@ -393,12 +399,18 @@ int compareGroundTruth(const Options& o)
   }
   double best_iou = -1.0, best_distance = 0.0;
   int best_exclusion = 0;
-  for (double distance = 1.0; distance <= 20.0; distance += 0.5)
+  const std::vector<int> exclusions = {0, 10, 25, 50, 75, 100, 150, 200, 300, 500};
+  const int distances = 39;  // 1.0 .. 20.0 m in steps of 0.5 m
+  // Each setting is a pass over all pairs of frames: minutes on a long sequence, so say how far it is.
+  openable::Progress progress("openable_eval: sweep", distances * exclusions.size(), o.quiet, "settings");
+  for (int step = 0; step < distances; ++step)
   {
-    for (int exclusion : {0, 10, 25, 50, 75, 100, 150, 200, 300, 500})
+    const double distance = 1.0 + 0.5 * step;
+    for (int exclusion : exclusions)
     {
       const openable::GroundTruthAgreement a =
           openable::compareGroundTruth(openable::posesGroundTruth(positions, distance, exclusion), reference);
+      progress.step();
       printAgreement(distance, exclusion, a);
       if (a.pairJaccard() > best_iou)
       {
@@ -408,6 +420,7 @@ int compareGroundTruth(const Options& o)
       }
     }
   }
+  progress.finish();
   std::cout << "best: distance " << best_distance << " exclusion " << best_exclusion << " pair_iou " << best_iou
             << "\n";
   return 0;

@@ -380,3 +380,19 @@ TEST_F(EvalToolTest, PairBeyondTheMatrixIsAOneLineErrorNotBadAlloc)
   EXPECT_NE(r.err.find("needs at least 2147483647x6"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("bad_alloc"), std::string::npos) << r.err;
 }
+
+// The sweep over D and E (390 settings, each a pass over all frame pairs) shows its progress on stderr
+// unless --quiet; the results on stdout are the same either way.
+TEST_F(EvalToolTest, SweepShowsProgressUnlessQuiet)
+{
+  const std::string args =
+      "--poses " + kKitti + "/poses/06.txt --compare " + kKitti + "/loop_ground_truth/kitti06GroundTruth.txt --sweep";
+  const ToolRun loud = run(args);
+  ASSERT_EQ(loud.status, 0) << loud.err;
+  EXPECT_NE(loud.err.find("openable_eval: sweep: 390/390 settings (100%), "), std::string::npos) << loud.err;
+  EXPECT_NE(loud.out.find("best: distance "), std::string::npos);
+  const ToolRun quiet = run(args + " --quiet");
+  ASSERT_EQ(quiet.status, 0) << quiet.err;
+  EXPECT_TRUE(quiet.err.empty()) << quiet.err;
+  EXPECT_EQ(quiet.out, loud.out);
+}
