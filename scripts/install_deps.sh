@@ -16,6 +16,8 @@ packages=(
   libopencv-dev libyaml-cpp-dev libeigen3-dev libceres-dev libgtest-dev libbenchmark-dev
   # stereo_image_proc for the rostest of the disparity pipeline (issue 13); -dev holds its package.xml
   ros-stereo-image-proc libstereo-image-proc-dev
+  # rviz: the launch files start it (and roslaunch-check of launch/kitti.launch needs it installed)
+  rviz
 )
 
 missing=()
