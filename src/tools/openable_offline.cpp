@@ -26,6 +26,7 @@
 #include "openable/online_detector.h"
 #include "openable/loop_decision.h"
 #include "openable/npy.h"
+#include "openable/progress.h"
 #include "openable/render.h"
 
 namespace fs = std::filesystem;
@@ -36,9 +37,11 @@ namespace
 const char* kUsage =
     "usage: openable_offline --config FILE.yaml --reference PATH [--query PATH] --output DIR\n"
     "                        [--set key=value]... [--reference-right PATH] [--query-right PATH]\n"
-    "                        [--ground-truth-tolerance T]\n"
+    "                        [--ground-truth-tolerance T] [--quiet]\n"
     "\n"
-    "PATH is a folder of images (sorted by file name) or a video file.\n"
+    "PATH is a folder of images (in name order, numbers compared as numbers: image2 before image10) or a\n"
+    "video file.\n"
+    "  --quiet          : no progress and no input summary on stderr\n"
     "  --reference only : loop-closure mode, each frame against the stream's own past\n"
     "  --query          : localisation mode, each query frame against the reference traversal\n"
     "  --set key=value  : override a configuration key (repeatable)\n"
@@ -46,7 +49,7 @@ const char* kUsage =
     "  --ground-truth-tolerance T : the traversals are frame-aligned; report the fraction of frames\n"
     "                     whose best match is within T frames of the same index\n"
     "Writes into DIR: distance_matrix.npy, distance_matrix.png, distance_matrix_thresholded.png (with a\n"
-    "threshold), loop_closures.csv, timings.json.\n";
+    "threshold), loop_closures.csv (published loop closures), decisions.csv (every frame), timings.json.\n";
 
 struct Options
 {
@@ -54,6 +57,7 @@ struct Options
   std::string reference, reference_right, query, query_right, output;
   std::vector<std::string> sets;
   int ground_truth_tolerance = -1;
+  bool quiet = false;
 };
 
 Options parseArguments(int argc, char** argv)
@@ -62,6 +66,11 @@ Options parseArguments(int argc, char** argv)
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
+    if (arg == "--quiet")
+    {
+      o.quiet = true;
+      continue;
+    }
     if (arg == "--help" || arg == "-h")
     {
       std::cout << kUsage;
@@ -85,7 +94,20 @@ Options parseArguments(int argc, char** argv)
     else if (arg == "--set")
       o.sets.push_back(value);
     else if (arg == "--ground-truth-tolerance")
-      o.ground_truth_tolerance = std::stoi(value);
+    {
+      size_t used = 0;
+      long t = -1;
+      try
+      {
+        t = std::stol(value, &used);
+      }
+      catch (const std::exception&)
+      {
+      }
+      if (used != value.size() || t < 0 || t > 1000000000)
+        throw Error("--ground-truth-tolerance: '" + value + "' is not allowed; expected frames, an integer in [0, 1e9]");
+      o.ground_truth_tolerance = static_cast<int>(t);
+    }
     else
       throw Error("unknown option '" + arg + "' (see --help)");
   }
@@ -130,8 +152,11 @@ struct Timings
 class TraversalReader
 {
 public:
-  TraversalReader(const std::string& path, const std::string& right_path) : source_(path)
+  TraversalReader(const std::string& path, const std::string& right_path, bool quiet) : source_(path)
   {
+    if (!quiet)
+      std::cerr << "reading " << path << ": " << source_.size() << " frames"
+                << (source_.isVideo() ? "" : " (" + source_.firstFile() + " .. " + source_.lastFile() + ")") << "\n";
     if (!right_path.empty())
     {
       right_ = std::make_unique<openable::ImageSource>(right_path);
@@ -139,6 +164,11 @@ public:
         throw Error("left '" + path + "' has " + std::to_string(source_.size()) + " frames but right '" + right_path +
                     "' has " + std::to_string(right_->size()));
     }
+  }
+
+  size_t size() const
+  {
+    return source_.size();
   }
 
   /// The next frame's images into `input` (empty when unreadable); false at the end.
@@ -265,7 +295,8 @@ int run(const Options& options)
   {
     const openable::OnlineDetector describer(config);
     openable::PlaceDatabase map(describer.describer().layout(), 0, config.toYaml());
-    TraversalReader reference(options.reference, options.reference_right);
+    TraversalReader reference(options.reference, options.reference_right, options.quiet);
+    openable::Progress progress("openable_offline: reference", reference.size(), options.quiet);
     openable::FrameInput input;
     for (; reference.next(input, timings); ++reference_files)
     {
@@ -279,7 +310,9 @@ int run(const Options& options)
                  reference_file_of.push_back(reference_files);
                });
       timings.describe += msSince(start);
+      progress.step();
     }
+    progress.finish();
     if (map.empty())
       throw Error("no reference frame could be described in '" + options.reference + "'");
     timings.frames += map.size();
@@ -290,7 +323,9 @@ int run(const Options& options)
 
   // The stream: every frame through the online pipeline, as a nodelet would see it.
   TraversalReader stream(localisation ? options.query : options.reference,
-                         localisation ? options.query_right : options.reference_right);
+                         localisation ? options.query_right : options.reference_right, options.quiet);
+  openable::Progress progress(localisation ? "openable_offline: query" : "openable_offline", stream.size(),
+                              options.quiet);
   std::vector<std::vector<float>> rows;  // per stream file: distances by reference file (empty = not described)
   std::vector<long> stream_file_of;      // loop-closure mode: database position -> file index
   const bool panoramic = config.camera_type == "panoramic";
@@ -304,6 +339,7 @@ int run(const Options& options)
   for (long file = 0; stream.next(input, timings); ++file)
   {
     rows.emplace_back();
+    progress.update(rows.size());
     openable::FrameOutcome outcome;
     if (!tryFrame(input.source, [&] { outcome = detector->process(input); }))
       continue;
@@ -340,6 +376,7 @@ int run(const Options& options)
       loops << "," << int(d.best.direction) << "," << d.best.shift;
     loops << "\n";
   }
+  progress.finish();
   if (timings.frames == 0)
     throw Error("no frame of '" + (localisation ? options.query : options.reference) + "' could be described");
 
