@@ -79,17 +79,27 @@ struct Config
   /// The whole configuration as YAML (used to stamp saved maps and outputs).
   std::string toYaml() const;
 
-  /// Keys whose change alters the descriptors (a map built with other values is incompatible).
+  /// Keys whose change alters the descriptors (the `describes` ones; a map built with other values is
+  /// incompatible).
   static const std::vector<std::string>& descriptorKeys();
 
+  /// The schema of one key: everything that lists keys (YAML, --set, ROS parameters, dynamic_reconfigure's
+  /// cfg/Detector.cfg, the documentation) derives from or is tested against this table.
   struct Key
   {
     std::string name;
     std::string type;  ///< bool | int | double | string
     std::string description;
+    double min = 0.0;        ///< numbers: smallest allowed value (with has_range)
+    double max = 0.0;        ///< numbers: largest allowed value (with has_range)
+    bool has_range = false;  ///< min/max hold (further rules, e.g. threshold's -1, are in validate())
+    bool live = false;       ///< can change while running (LoopDetector::updateMatching, dynamic_reconfigure)
+    bool describes = false;  ///< changes the descriptors: a map built with another value is incompatible
   };
   /// Every key, in documentation order.
   static const std::vector<Key>& keys();
+  /// Keys that can change while running (the `live` ones), in documentation order.
+  static const std::vector<std::string>& liveKeys();
 
   bool isBinaryDescriptor() const;
 };

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -24,6 +25,24 @@ struct KeyAccess
   Config::Key key;
   std::function<void(Config&, const std::string&)> set;
   std::function<std::string(const Config&)> get;
+
+  KeyAccess range(double low, double high)
+  {
+    key.min = low;
+    key.max = high;
+    key.has_range = true;
+    return *this;
+  }
+  KeyAccess live()
+  {
+    key.live = true;
+    return *this;
+  }
+  KeyAccess describes()
+  {
+    key.describes = true;
+    return *this;
+  }
 };
 
 std::string trim(const std::string& s)
@@ -121,50 +140,50 @@ KeyAccess makeKey<std::string>(const char* name, const char* description, std::s
 const std::vector<KeyAccess>& table()
 {
   static const std::vector<KeyAccess> keys = {
-      makeKey("camera_type", "mono | stereo | panoramic", &Config::camera_type),
+      makeKey("camera_type", "mono | stereo | panoramic", &Config::camera_type).describes(),
       makeKey("description_type", "global (one descriptor per image) | grid (grid_x x grid_y cells)",
-              &Config::description_type),
-      makeKey("patch_size", "side of the square patch every cell is downsampled to (pixels)", &Config::patch_size),
-      makeKey("grid_x", "cells across, description_type grid", &Config::grid_x),
-      makeKey("grid_y", "cells down, description_type grid", &Config::grid_y),
-      makeKey("panoramas", "vertical sub-panoramas per panorama, camera_type panoramic", &Config::panoramas),
+              &Config::description_type).describes(),
+      makeKey("patch_size", "side of the square patch every cell is downsampled to (pixels)", &Config::patch_size).range(8, 1024).describes(),
+      makeKey("grid_x", "cells across, description_type grid", &Config::grid_x).range(1, 64).describes(),
+      makeKey("grid_y", "cells down, description_type grid", &Config::grid_y).range(1, 64).describes(),
+      makeKey("panoramas", "vertical sub-panoramas per panorama, camera_type panoramic", &Config::panoramas).range(1, 64).describes(),
       makeKey("illumination_invariance", "apply paper Eq. 6 before description (colour input)",
-              &Config::illumination_invariance),
-      makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha),
+              &Config::illumination_invariance).describes(),
+      makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha).range(0, 1).describes(),
       makeKey("patch_normalization", "block side (pixels of the patch) for local contrast normalisation; 0 = off",
-              &Config::patch_normalization),
-      makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor),
-      makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length),
+              &Config::patch_normalization).range(0, 1024).describes(),
+      makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor).describes(),
+      makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length).range(1, 10000).live(),
       makeKey("min_sequence_length",
               "sequences of fewer frames are never candidates; 0 = only full sequences of "
               "sequence_length frames (1 = any, the mean of the available terms)",
-              &Config::min_sequence_length),
+              &Config::min_sequence_length).range(0, 10000).live(),
       makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = no distance gate",
-              &Config::threshold),
+              &Config::threshold).range(-1, 1).live(),
       makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
-              &Config::exclusion_window),
-      makeKey("top_k", "candidates reported per frame", &Config::top_k),
-      makeKey("min_uniqueness", "accept only when 1 - best / second best >= this (0 = off)", &Config::min_uniqueness),
+              &Config::exclusion_window).range(0, 100000000).live(),
+      makeKey("top_k", "candidates reported per frame", &Config::top_k).range(1, 1000).live(),
+      makeKey("min_uniqueness", "accept only when 1 - best / second best >= this (0 = off)", &Config::min_uniqueness).range(0, 1).live(),
       makeKey("uniqueness_window", "frames around the best match skipped when finding the second best (frames)",
-              &Config::uniqueness_window),
-      makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional),
-      makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history),
+              &Config::uniqueness_window).range(0, 100000).live(),
+      makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional).live(),
+      makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history).range(0, 100000000),
       makeKey("min_candidates",
               "loop-closure decision: fewer full-sequence candidate places than this is 'too early' (frames)",
-              &Config::min_candidates),
+              &Config::min_candidates).range(0, 100000000).live(),
       makeKey("consistent_frames",
               "loop-closure decision: consecutive frames that must pass the gates with matches advancing "
               "together (1 = off)",
-              &Config::consistent_frames),
+              &Config::consistent_frames).range(1, 1000).live(),
       makeKey("consistency_tolerance",
               "loop-closure decision: frames a match may deviate from advancing one place per frame",
-              &Config::consistency_tolerance),
+              &Config::consistency_tolerance).range(0, 1000).live(),
       makeKey("exclusion_seconds",
               "loop-closure mode: frames stamped less than this before the query are never matched (s; 0 = off)",
-              &Config::exclusion_seconds),
+              &Config::exclusion_seconds).range(0, 1e9).live(),
       makeKey("stereo_num_disparities", "SGBM disparity range at 640 px width (pixels)",
-              &Config::stereo_num_disparities),
-      makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size),
+              &Config::stereo_num_disparities).range(16, 1024).describes(),
+      makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size).range(1, 31).describes(),
       makeKey("display_normalization",
               "distance matrix images: max (paper Eq. 5, M / max M) | minmax (contrast "
               "stretch)",
@@ -172,7 +191,7 @@ const std::vector<KeyAccess>& table()
       makeKey("color_map",
               "distance matrix colour map 0..11 (AUTUMN BONE JET WINTER RAINBOW OCEAN SUMMER SPRING "
               "COOL HSV PINK HOT)",
-              &Config::color_map),
+              &Config::color_map).range(0, 11).live(),
   };
   return keys;
 }
@@ -221,18 +240,27 @@ const std::vector<Config::Key>& Config::keys()
 
 const std::vector<std::string>& Config::descriptorKeys()
 {
-  static const std::vector<std::string> keys = {"camera_type",
-                                                "description_type",
-                                                "patch_size",
-                                                "grid_x",
-                                                "grid_y",
-                                                "panoramas",
-                                                "descriptor",
-                                                "illumination_invariance",
-                                                "alpha",
-                                                "patch_normalization",
-                                                "stereo_num_disparities",
-                                                "stereo_block_size"};
+  static const std::vector<std::string> keys = []
+  {
+    std::vector<std::string> out;
+    for (const auto& k : table())
+      if (k.key.describes)
+        out.push_back(k.key.name);
+    return out;
+  }();
+  return keys;
+}
+
+const std::vector<std::string>& Config::liveKeys()
+{
+  static const std::vector<std::string> keys = []
+  {
+    std::vector<std::string> out;
+    for (const auto& k : table())
+      if (k.key.live)
+        out.push_back(k.key.name);
+    return out;
+  }();
   return keys;
 }
 
@@ -256,24 +284,34 @@ std::vector<std::string> Config::validate() const
   std::vector<std::string> errors;
   auto bad = [&errors](const std::string& key, const std::string& value, const std::string& expected)
   { errors.push_back(key + ": value '" + value + "' is not allowed; expected " + expected); };
-  auto inRange = [&](const char* key, int value, int low, int high)
-  {
-    if (value < low || value > high)
-      bad(key, std::to_string(value), "an integer in [" + std::to_string(low) + ", " + std::to_string(high) + "]");
-  };
 
+  // Ranges from the key table (the same figures cfg/Detector.cfg carries, tested).
+  for (const auto& k : table())
+  {
+    if (!k.key.has_range)
+      continue;
+    const std::string text = k.get(*this);
+    const double value = std::strtod(text.c_str(), nullptr);
+    if (value >= k.key.min && value <= k.key.max)  // false for NaN too
+      continue;
+    if (k.key.type == "int")
+      bad(k.key.name, text,
+          "an integer in [" + std::to_string(int64_t(k.key.min)) + ", " + std::to_string(int64_t(k.key.max)) + "]");
+    else if (k.key.name == "threshold")
+      bad(k.key.name, text, "-1 (off) or a number in [0, 1]");
+    else
+      bad(k.key.name, text, "a number in [" + formatDouble(k.key.min) + ", " + formatDouble(k.key.max) + "]");
+  }
+
+  // Rules beyond a range.
   const std::vector<std::string> cameras = {"mono", "stereo", "panoramic"};
   if (std::find(cameras.begin(), cameras.end(), camera_type) == cameras.end())
     bad("camera_type", camera_type, oneOf(cameras));
   if (description_type != "global" && description_type != "grid")
     bad("description_type", description_type, "global | grid");
-  inRange("patch_size", patch_size, 8, 1024);
-  inRange("grid_x", grid_x, 1, 64);
-  inRange("grid_y", grid_y, 1, 64);
   if (description_type == "global" && (grid_x != 1 || grid_y != 1))
     bad("grid_x/grid_y", std::to_string(grid_x) + "x" + std::to_string(grid_y),
         "1x1 with description_type global (set description_type: grid to use a grid)");
-  inRange("panoramas", panoramas, 1, 64);
   const uint64_t working_bytes = workingBytesPerFrame();
   if (working_bytes > kMaxWorkingBytesPerFrame)
     bad("patch_size/grid_x/grid_y" + std::string(camera_type == "panoramic" ? "/panoramas" : ""),
@@ -282,40 +320,28 @@ std::vector<std::string> Config::validate() const
         "at most " + std::to_string(kMaxWorkingBytesPerFrame) + " bytes of images per frame; this asks for " +
             std::to_string(working_bytes) + " bytes per frame (" + std::to_string(kWorkingBytesPerPatchPixel) +
             " bytes per patch pixel)");
-  inRange("patch_normalization", patch_normalization, 0, patch_size);
-  if (!std::isfinite(alpha) || alpha < 0.0 || alpha > 1.0)
-    bad("alpha", formatDouble(alpha), "a number in [0, 1]");
+  if (patch_normalization > patch_size && patch_size >= 8)
+    bad("patch_normalization", std::to_string(patch_normalization),
+        "an integer in [0, " + std::to_string(patch_size) + "] (at most patch_size)");
   const auto& names = descriptorNames();
   if (std::find(names.begin(), names.end(), descriptor) == names.end())
     bad("descriptor", descriptor, oneOf(names));
   else if (descriptor == "D-LDB" && camera_type != "stereo")
     bad("descriptor", descriptor, "a mono descriptor (D-LDB needs camera_type stereo)");
-  inRange("sequence_length", sequence_length, 1, 10000);
-  inRange("min_sequence_length", min_sequence_length, 0, sequence_length);
-  if (!std::isfinite(threshold) || !(threshold == -1.0 || (threshold >= 0.0 && threshold <= 1.0)))
+  if (min_sequence_length > sequence_length && sequence_length >= 1)
+    bad("min_sequence_length", std::to_string(min_sequence_length),
+        "an integer in [0, " + std::to_string(sequence_length) + "] (at most sequence_length)");
+  if (threshold > -1.0 && threshold < 0.0)
     bad("threshold", formatDouble(threshold), "-1 (off) or a number in [0, 1]");
-  inRange("exclusion_window", exclusion_window, 0, 100000000);
-  inRange("top_k", top_k, 1, 1000);
-  if (!std::isfinite(min_uniqueness) || min_uniqueness < 0.0 || min_uniqueness > 1.0)
-    bad("min_uniqueness", formatDouble(min_uniqueness), "a number in [0, 1]");
-  inRange("uniqueness_window", uniqueness_window, 0, 100000);
-  inRange("max_history", max_history, 0, 100000000);
   // In 64 bits: sequence_length and exclusion_window may themselves be out of range (up to INT_MAX) here.
   const int64_t history_floor = 2 * (int64_t(sequence_length) + int64_t(exclusion_window));
   if (max_history > 0 && max_history <= history_floor)
     bad("max_history", std::to_string(max_history),
         "0 (unbounded) or more than 2 * (sequence_length + exclusion_window) = " + std::to_string(history_floor));
-  inRange("min_candidates", min_candidates, 0, 100000000);
-  inRange("consistent_frames", consistent_frames, 1, 1000);
-  inRange("consistency_tolerance", consistency_tolerance, 0, 1000);
-  if (!std::isfinite(exclusion_seconds) || exclusion_seconds < 0.0 || exclusion_seconds > 1e9)
-    bad("exclusion_seconds", formatDouble(exclusion_seconds), "a number of seconds in [0, 1e9]");
-  inRange("stereo_num_disparities", stereo_num_disparities, 16, 1024);
-  if (stereo_block_size < 1 || stereo_block_size > 31 || stereo_block_size % 2 == 0)
+  if (stereo_block_size % 2 == 0)
     bad("stereo_block_size", std::to_string(stereo_block_size), "an odd integer in [1, 31]");
   if (display_normalization != "max" && display_normalization != "minmax")
     bad("display_normalization", display_normalization, "max | minmax");
-  inRange("color_map", color_map, 0, 11);
   return errors;
 }
 

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
+#include <regex>
 #include <fstream>
 #include <functional>
 
@@ -205,4 +208,84 @@ TEST(ConfigHardening, AbsurdMemoryPerFrameIsRefusedWithTheFigure)
   EXPECT_TRUE(c.validate().empty()) << ::testing::PrintToString(c.validate());
   c.patch_size = 129;
   EXPECT_FALSE(c.validate().empty());
+}
+
+namespace
+{
+/// The gen.add(...) entries of cfg/Detector.cfg: name -> {type, default, min, max} as written.
+struct CfgEntry
+{
+  std::string type, default_value, min, max;
+};
+std::map<std::string, CfgEntry> readDetectorCfg()
+{
+  std::ifstream in(std::string(OPENABLE_SOURCE_DIR) + "/cfg/Detector.cfg");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::map<std::string, CfgEntry> entries;
+  // gen.add("name", type_t, level, "description", default[, min, max][, edit_method=...])
+  const std::regex add(R"re(gen\.add\("(\w+)",\s*(\w+),\s*\w+,\s*"[^"]*",\s*([^,\)]+)(?:,\s*([^,\)=]+),\s*([^,\)=]+))?)re");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), add); it != std::sregex_iterator(); ++it)
+    entries[(*it)[1]] = {(*it)[2], (*it)[3], (*it)[4], (*it)[5]};
+  return entries;
+}
+
+double number(const std::string& text)
+{
+  if (text == "True")
+    return 1;
+  if (text == "False")
+    return 0;
+  return std::stod(text);
+}
+}  // namespace
+
+TEST(Config, DynamicReconfigureHoldsEveryLiveKeyWithItsDefaultAndRange)
+{
+  const auto cfg = readDetectorCfg();
+  ASSERT_GE(cfg.size(), 10u);
+  const Config defaults;
+  for (const auto& key : Config::keys())
+  {
+    const auto it = cfg.find(key.name);
+    if (!key.live)
+    {
+      EXPECT_TRUE(it == cfg.end()) << key.name << " cannot change live but is in cfg/Detector.cfg";
+      continue;
+    }
+    ASSERT_TRUE(it != cfg.end()) << key.name << " is live but missing from cfg/Detector.cfg";
+    const std::string type = key.type == "int" ? "int_t" : key.type == "double" ? "double_t" : "bool_t";
+    EXPECT_EQ(it->second.type, type) << key.name;
+    const std::string value = defaults.get(key.name);
+    const double expected = value == "true" ? 1.0 : value == "false" ? 0.0 : std::stod(value);
+    EXPECT_DOUBLE_EQ(number(it->second.default_value), expected) << key.name;
+    if (key.has_range)
+    {
+      ASSERT_FALSE(it->second.min.empty()) << key.name << " has no range in cfg/Detector.cfg";
+      EXPECT_DOUBLE_EQ(number(it->second.min), key.min) << key.name;
+      EXPECT_DOUBLE_EQ(number(it->second.max), key.max) << key.name;
+    }
+  }
+}
+
+TEST(Config, DescriptorAndLiveKeysComeFromTheTable)
+{
+  for (const auto& name : Config::descriptorKeys())
+    EXPECT_FALSE(std::find(Config::liveKeys().begin(), Config::liveKeys().end(), name) != Config::liveKeys().end())
+        << name << " changes the descriptors, so it cannot be live";
+  EXPECT_EQ(Config::descriptorKeys().size(), 12u);
+  EXPECT_NE(std::find(Config::liveKeys().begin(), Config::liveKeys().end(), "threshold"), Config::liveKeys().end());
+  EXPECT_EQ(std::find(Config::liveKeys().begin(), Config::liveKeys().end(), "max_history"), Config::liveKeys().end());
+}
+
+TEST(Config, EveryShippedConfigurationListsEveryKey)
+{
+  for (const char* name : {"default", "paper", "gardens_point", "nordland"})
+  {
+    const std::string path = std::string(OPENABLE_SOURCE_DIR) + "/config/" + name + ".yaml";
+    EXPECT_NO_THROW(Config::fromYamlFile(path).validateOrThrow()) << path;
+    std::ifstream in(path);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (const auto& key : Config::keys())
+      EXPECT_NE(text.find("\n" + key.name + ":"), std::string::npos) << key.name << " is missing from " << path;
+  }
 }
