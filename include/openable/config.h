@@ -104,6 +104,9 @@ struct Config
   bool isBinaryDescriptor() const;
 };
 
+/// The candidate with the smallest edit distance to `name` (for "did you mean" messages); "" when empty.
+std::string closestName(const std::string& name, const std::vector<std::string>& candidates);
+
 /// Paper Eq. 7: alpha from the peak spectral responses (nm) of the red, green and blue channels.
 double alphaFromWavelengths(double lambda_red, double lambda_green, double lambda_blue);
 

@@ -202,9 +202,14 @@ const KeyAccess& find(const std::string& key)
     if (k.key.name == key)
       return k;
   std::string known;
+  std::vector<std::string> names;
   for (const auto& k : table())
+  {
     known += (known.empty() ? "" : ", ") + k.key.name;
-  throw Error("unknown configuration key '" + key + "'; known keys: " + known);
+    names.push_back(k.key.name);
+  }
+  throw Error("unknown configuration key '" + key + "' (did you mean '" + closestName(key, names) +
+              "'?); known keys: " + known);
 }
 
 /// A configuration file is a few kilobytes; anything much larger is not one (or is a device).
@@ -446,6 +451,41 @@ std::string Config::toYaml() const
     out += k.key.name + ": " + value + "\n";
   }
   return out;
+}
+
+std::string closestName(const std::string& name, const std::vector<std::string>& candidates)
+{
+  // Levenshtein distance, one row at a time.
+  const auto distance = [&name](const std::string& other)
+  {
+    std::vector<size_t> row(other.size() + 1);
+    for (size_t j = 0; j <= other.size(); ++j)
+      row[j] = j;
+    for (size_t i = 1; i <= name.size(); ++i)
+    {
+      size_t diagonal = row[0];
+      row[0] = i;
+      for (size_t j = 1; j <= other.size(); ++j)
+      {
+        const size_t above = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (name[i - 1] == other[j - 1] ? 0 : 1)});
+        diagonal = above;
+      }
+    }
+    return row[other.size()];
+  };
+  std::string best;
+  size_t best_distance = SIZE_MAX;
+  for (const auto& candidate : candidates)
+  {
+    const size_t d = distance(candidate);
+    if (d < best_distance)
+    {
+      best = candidate;
+      best_distance = d;
+    }
+  }
+  return best;
 }
 
 double alphaFromWavelengths(double lambda_red, double lambda_green, double lambda_blue)

@@ -1,53 +1,58 @@
 // openable_ros/MonoDetector: ABLE-M, loop closures from one camera.
 #include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
 #include <pluginlib/class_list_macros.hpp>
 
 #include "openable_ros/conversions.h"
-#include "openable_ros/detector_base.h"
+#include "openable_ros/detector.h"
 
 namespace openable_ros
 {
-class MonoDetector : public DetectorBase
+class MonoDetector : public nodelet::Nodelet
 {
 private:
   void onInit() override
   {
+    std::vector<std::string> warnings;
+    const RosParameters parameters = readRosParameters(getPrivateNodeHandle(), warnings);
+    for (const auto& warning : warnings)
+      NODELET_WARN_STREAM("parameter " << warning);
     openable::Config defaults;
     defaults.camera_type = "mono";
-    if (!setupDetector(defaults))
-    {
+    detector_ = Detector::create(getNodeHandle(), getPrivateNodeHandle(), getName(), defaults, parameters);
+    if (!detector_)
       return;
-    }
-    input_transport_ = std::make_unique<image_transport::ImageTransport>(getNodeHandle());
+    transport_ = std::make_unique<image_transport::ImageTransport>(getNodeHandle());
     // Transport hints from the private handle: ~image_transport:=compressed works.
-    image_sub_ = input_transport_->subscribe(
-        "image", uint32_t(queueSize()), &MonoDetector::imageCallback, this,
+    image_sub_ = transport_->subscribe(
+        "image", uint32_t(parameters.queue_size), &MonoDetector::imageCallback, this,
         image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
-    if (verifyEnabled())
+    if (parameters.verify)
     {
-      // Geometric verification needs the intrinsics (rectified image: P).
+      // Geometric verification needs the intrinsics of the rectified image (P), beside the image.
       info_sub_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>(
-          "camera_info", 1, [this](const sensor_msgs::CameraInfoConstPtr& msg) { setCamera(toPinholeCamera(*msg)); });
+          "camera_info", 1,
+          [this](const sensor_msgs::CameraInfoConstPtr& msg) { detector_->setCamera(toPinholeCamera(*msg)); });
     }
   }
 
   void imageCallback(const sensor_msgs::ImageConstPtr& msg)
   {
-    cv::Mat image;
+    openable::FrameInput input;
     std::string error;
-    if (!toCoreImage(msg, image, error))
+    if (!toCoreImage(msg, input.image, error))
     {
-      rejectFrame("bad image", "'" + image_sub_.getTopic() + "': " + error);
+      detector_->reject("bad image", "'" + image_sub_.getTopic() + "': " + error);
       return;
     }
-    openable::FrameInput input;
-    input.image = image;
-    processFrame(msg->header, image_sub_.getTopic(), std::move(input));
+    detector_->process(msg->header, image_sub_.getTopic(), std::move(input));
   }
 
-  std::unique_ptr<image_transport::ImageTransport> input_transport_;
+  std::unique_ptr<Detector> detector_;
+  std::unique_ptr<image_transport::ImageTransport> transport_;
   image_transport::Subscriber image_sub_;
   ros::Subscriber info_sub_;
 };

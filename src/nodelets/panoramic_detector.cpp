@@ -1,115 +1,109 @@
 // openable_ros/PanoramicDetector: ABLE-P, loop closures from a panoramic camera, in both directions.
 #include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
 #include <sensor_msgs/Image.h>
 
 #include <pluginlib/class_list_macros.hpp>
 
+#include "openable/ring_sync.h"
 #include "openable_ros/conversions.h"
-#include "openable_ros/detector_base.h"
-#include "openable_ros/params.h"
-#include "openable_ros/ring_synchronizer.h"
+#include "openable_ros/detector.h"
 
 namespace openable_ros
 {
-class PanoramicDetector : public DetectorBase
+class PanoramicDetector : public nodelet::Nodelet
 {
 private:
+  using Ring = openable::RingSync<sensor_msgs::ImageConstPtr>;
+
   void onInit() override
   {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     std::vector<std::string> warnings;
-    cameras_ = readStringList(pnh, "cameras", warnings);
-    const bool approximate = readBool(pnh, "approximate_sync", false, warnings);
-    const double max_skew = readDouble(pnh, "max_skew", 0.02, 0.0, 10.0, "s", warnings);
+    const RosParameters parameters = readRosParameters(pnh, warnings);
     for (const auto& warning : warnings)
-    {
       NODELET_WARN_STREAM("parameter " << warning);
-    }
     openable::Config defaults;
     defaults.camera_type = "panoramic";
-    if (!cameras_.empty())
+    const size_t cameras = parameters.cameras.size();
+    if (cameras > 0)
     {
       // One sub-panorama per camera: ~panoramas follows the ring.
       int panoramas = 0;
-      if (pnh.getParam("panoramas", panoramas) && panoramas != int(cameras_.size()))
-      {
-        NODELET_WARN_STREAM("parameter ~panoramas: value '" << panoramas << "' does not match the " << cameras_.size()
-                                                            << " ~cameras; using " << cameras_.size());
-      }
-      pnh.setParam("panoramas", int(cameras_.size()));
+      if (pnh.getParam("panoramas", panoramas) && panoramas != int(cameras))
+        NODELET_WARN_STREAM("parameter ~panoramas: value '" << panoramas << "' does not match the " << cameras
+                                                            << " ~cameras; using " << cameras);
+      pnh.setParam("panoramas", int(cameras));
     }
-    if (!setupDetector(defaults))
-    {
+    detector_ = Detector::create(getNodeHandle(), pnh, getName(), defaults, parameters);
+    if (!detector_)
       return;
-    }
-    input_transport_ = std::make_unique<image_transport::ImageTransport>(getNodeHandle());
+    transport_ = std::make_unique<image_transport::ImageTransport>(getNodeHandle());
     const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
-    if (cameras_.empty())
+    const uint32_t queue = uint32_t(parameters.queue_size);
+    if (cameras == 0)
     {
-      subscribers_.push_back(input_transport_->subscribe("image", uint32_t(queueSize()),
-                                                         &PanoramicDetector::panoramaCallback, this, hints));
+      subscribers_.push_back(transport_->subscribe("image", queue, &PanoramicDetector::panoramaCallback, this, hints));
       return;
     }
-    synchronizer_ =
-        std::make_unique<RingSynchronizer>(cameras_.size(), size_t(queueSize()), approximate ? max_skew : 0.0);
+    ring_ = std::make_unique<Ring>(cameras, size_t(queue), parameters.approximate_sync ? parameters.max_skew : 0.0,
+                                   [](const sensor_msgs::ImageConstPtr& m) { return m->header.stamp.toSec(); });
     std::vector<std::string> topics;
-    for (size_t i = 0; i < cameras_.size(); ++i)
+    for (size_t i = 0; i < cameras; ++i)
     {
-      subscribers_.push_back(input_transport_->subscribe(
-          cameras_[i], uint32_t(queueSize()),
+      subscribers_.push_back(transport_->subscribe(
+          parameters.cameras[i], queue,
           boost::function<void(const sensor_msgs::ImageConstPtr&)>([this, i](const sensor_msgs::ImageConstPtr& msg)
                                                                    { cameraCallback(i, msg); }),
           ros::VoidPtr(), hints));
       topics.push_back(subscribers_.back().getTopic());
     }
-    startSyncWatchdog(topics, approximate ? "Raise ~max_skew if the cameras are not triggered together."
-                                          : "If the cameras are not hardware-triggered, set ~approximate_sync "
-                                            "true (with ~max_skew).");
+    detector_->watchSync(topics, parameters.approximate_sync
+                                     ? "Raise ~max_skew if the cameras are not triggered together."
+                                     : "If the cameras are not hardware-triggered, set ~approximate_sync true (with "
+                                       "~max_skew).");
   }
 
   void panoramaCallback(const sensor_msgs::ImageConstPtr& msg)
   {
-    cv::Mat image;
+    openable::FrameInput input;
     std::string error;
-    if (!toCoreImage(msg, image, error))
+    if (!toCoreImage(msg, input.image, error))
     {
-      rejectFrame("bad image", "'" + subscribers_[0].getTopic() + "': " + error);
+      detector_->reject("bad image", "'" + subscribers_[0].getTopic() + "': " + error);
       return;
     }
-    openable::FrameInput input;
-    input.image = image;
-    processFrame(msg->header, subscribers_[0].getTopic(), std::move(input));
+    detector_->process(msg->header, subscribers_[0].getTopic(), std::move(input));
   }
 
   void cameraCallback(size_t index, const sensor_msgs::ImageConstPtr& msg)
   {
-    noteInput(index);
-    RingSynchronizer::Set set;
-    if (!synchronizer_->add(index, msg, set))
-    {
+    detector_->noteInput(index);
+    Ring::Set set;
+    const bool complete = ring_->add(index, msg, set);
+    detector_->noteDropped(ring_->dropped());
+    if (!complete)
       return;
-    }
-    noteSynchronised();
-    std::vector<cv::Mat> images(set.size());
+    detector_->noteSet();
+    openable::FrameInput input;
+    input.cameras.resize(set.size());
     for (size_t i = 0; i < set.size(); ++i)
     {
       std::string error;
-      if (!toCoreImage(set[i], images[i], error))
+      if (!toCoreImage(set[i], input.cameras[i], error))
       {
-        rejectFrame("bad image", "'" + subscribers_[i].getTopic() + "': " + error);
+        detector_->reject("bad image", "'" + subscribers_[i].getTopic() + "': " + error);
         return;
       }
     }
     // The ring is stamped by its first camera.
-    openable::FrameInput input;
-    input.cameras = std::move(images);
-    processFrame(set[0]->header, subscribers_[0].getTopic(), std::move(input));
+    detector_->process(set[0]->header, subscribers_[0].getTopic(), std::move(input));
   }
 
-  std::vector<std::string> cameras_;
-  std::unique_ptr<image_transport::ImageTransport> input_transport_;
+  std::unique_ptr<Detector> detector_;
+  std::unique_ptr<image_transport::ImageTransport> transport_;
   std::vector<image_transport::Subscriber> subscribers_;
-  std::unique_ptr<RingSynchronizer> synchronizer_;
+  std::unique_ptr<Ring> ring_;
 };
 
 }  // namespace openable_ros

@@ -5,6 +5,7 @@
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/sync_policies/exact_time.h>
 #include <message_filters/synchronizer.h>
+#include <nodelet/nodelet.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <stereo_msgs/DisparityImage.h>
@@ -15,12 +16,11 @@
 
 #include "openable/stereo.h"
 #include "openable_ros/conversions.h"
-#include "openable_ros/detector_base.h"
-#include "openable_ros/params.h"
+#include "openable_ros/detector.h"
 
 namespace openable_ros
 {
-class StereoDetector : public DetectorBase
+class StereoDetector : public nodelet::Nodelet
 {
 private:
   using Image = sensor_msgs::Image;
@@ -35,26 +35,26 @@ private:
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     std::vector<std::string> warnings;
-    const bool approximate = readBool(pnh, "approximate_sync", false, warnings);
-    const bool use_disparity = readBool(pnh, "use_disparity", false, warnings);
-    use_disparity_ = use_disparity;
+    const RosParameters parameters = readRosParameters(pnh, warnings);
     for (const auto& warning : warnings)
-    {
       NODELET_WARN_STREAM("parameter " << warning);
-    }
+    const bool approximate = parameters.approximate_sync;
+    use_disparity_ = parameters.use_disparity;
+    const bool use_disparity = use_disparity_;
     openable::Config defaults;
     defaults.camera_type = "stereo";
     defaults.descriptor = "D-LDB";
-    if (!setupDetector(defaults))
+    detector_ = Detector::create(nh, pnh, getName(), defaults, parameters);
+    if (!detector_)
     {
       return;
     }
-    const uint32_t queue = uint32_t(queueSize());
+    const uint32_t queue = uint32_t(parameters.queue_size);
     input_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
     const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
     left_sub_.subscribe(*input_transport_, "left/image_rect", queue, hints);
     left_sub_.registerCallback(boost::function<void(const sensor_msgs::ImageConstPtr&)>(
-        [this](const sensor_msgs::ImageConstPtr&) { noteInput(0); }));
+        [this](const sensor_msgs::ImageConstPtr&) { detector_->noteInput(0); }));
     // camera_info is optional: when it comes, it is checked against the images (calibrated, same size).
     left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>("left/camera_info", 1,
                                                            [this](const sensor_msgs::CameraInfoConstPtr& msg)
@@ -69,7 +69,7 @@ private:
     {
       disparity_sub_.subscribe(nh, "disparity", queue);
       disparity_sub_.registerCallback(boost::function<void(const stereo_msgs::DisparityImageConstPtr&)>(
-          [this](const stereo_msgs::DisparityImageConstPtr&) { noteInput(1); }));
+          [this](const stereo_msgs::DisparityImageConstPtr&) { detector_->noteInput(1); }));
       if (approximate)
       {
         approximate_disparity_ = std::make_unique<message_filters::Synchronizer<ApproximateDisparity>>(
@@ -82,12 +82,12 @@ private:
                                                                                            left_sub_, disparity_sub_);
         exact_disparity_->registerCallback(&StereoDetector::disparityCallback, this);
       }
-      startSyncWatchdog({left_sub_.getTopic(), disparity_sub_.getTopic()}, advice);
+      detector_->watchSync({left_sub_.getTopic(), disparity_sub_.getTopic()}, advice);
       return;
     }
     right_sub_.subscribe(*input_transport_, "right/image_rect", queue, hints);
     right_sub_.registerCallback(boost::function<void(const sensor_msgs::ImageConstPtr&)>(
-        [this](const sensor_msgs::ImageConstPtr&) { noteInput(1); }));
+        [this](const sensor_msgs::ImageConstPtr&) { detector_->noteInput(1); }));
     right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>("right/camera_info", 1,
                                                             [this](const sensor_msgs::CameraInfoConstPtr& msg)
                                                             {
@@ -105,18 +105,18 @@ private:
       exact_pair_ = std::make_unique<message_filters::Synchronizer<ExactPair>>(ExactPair(queue), left_sub_, right_sub_);
       exact_pair_->registerCallback(&StereoDetector::pairCallback, this);
     }
-    startSyncWatchdog({left_sub_.getTopic(), right_sub_.getTopic()}, advice);
+    detector_->watchSync({left_sub_.getTopic(), right_sub_.getTopic()}, advice);
   }
 
   /// With ~verify: the verifier's camera from the pair's projections (the baseline from the right P), or
   /// from the left one alone in disparity mode.
   void updateCamera()
   {
-    if (!verifyEnabled() || !left_info_ || (!use_disparity_ && !right_info_))
+    if (!detector_->parameters().verify || !left_info_ || (!use_disparity_ && !right_info_))
     {
       return;
     }
-    setCamera(toPinholeCamera(*left_info_, use_disparity_ ? nullptr : right_info_.get()));
+    detector_->setCamera(toPinholeCamera(*left_info_, use_disparity_ ? nullptr : right_info_.get()));
   }
 
   /// False (with the frame rejected) when a received camera_info says the image cannot be used.
@@ -128,14 +128,14 @@ private:
     }
     if (info->K[0] == 0.0)
     {
-      rejectFrame("uncalibrated camera", "'" + topic +
+      detector_->reject("uncalibrated camera", "'" + topic +
                                              "': camera_info has K[0] = 0 (uncalibrated); expected a "
                                              "calibrated, rectified camera");
       return false;
     }
     if (info->width != image.width || info->height != image.height)
     {
-      rejectFrame("camera_info size mismatch", "'" + topic + "': image is " + std::to_string(image.width) + "x" +
+      detector_->reject("camera_info size mismatch", "'" + topic + "': image is " + std::to_string(image.width) + "x" +
                                                    std::to_string(image.height) + " but its camera_info says " +
                                                    std::to_string(info->width) + "x" + std::to_string(info->height));
       return false;
@@ -145,23 +145,23 @@ private:
 
   void pairCallback(const sensor_msgs::ImageConstPtr& left_msg, const sensor_msgs::ImageConstPtr& right_msg)
   {
-    noteSynchronised();
+    detector_->noteSet();
     cv::Mat left;
     cv::Mat right;
     std::string error;
     if (!toCoreImage(left_msg, left, error))
     {
-      rejectFrame("bad image", "'" + left_sub_.getTopic() + "': " + error);
+      detector_->reject("bad image", "'" + left_sub_.getTopic() + "': " + error);
       return;
     }
     if (!toCoreImage(right_msg, right, error))
     {
-      rejectFrame("bad image", "'" + right_sub_.getTopic() + "': " + error);
+      detector_->reject("bad image", "'" + right_sub_.getTopic() + "': " + error);
       return;
     }
     if (left.size() != right.size() || left.type() != right.type())
     {
-      rejectFrame("left/right mismatch", "'" + left_sub_.getTopic() + "' is " + std::to_string(left.cols) + "x" +
+      detector_->reject("left/right mismatch", "'" + left_sub_.getTopic() + "' is " + std::to_string(left.cols) + "x" +
                                              std::to_string(left.rows) + " " + left_msg->encoding + " but '" +
                                              right_sub_.getTopic() + "' is " + std::to_string(right.cols) + "x" +
                                              std::to_string(right.rows) + " " + right_msg->encoding +
@@ -178,29 +178,29 @@ private:
     openable::FrameInput input;
     input.image = left;
     input.right = right;
-    processFrame(left_msg->header, left_sub_.getTopic(), std::move(input));
+    detector_->process(left_msg->header, left_sub_.getTopic(), std::move(input));
   }
 
   void disparityCallback(const sensor_msgs::ImageConstPtr& left_msg,
                          const stereo_msgs::DisparityImageConstPtr& disparity_msg)
   {
-    noteSynchronised();
+    detector_->noteSet();
     cv::Mat left;
     cv::Mat raw;
     std::string error;
     if (!toCoreImage(left_msg, left, error))
     {
-      rejectFrame("bad image", "'" + left_sub_.getTopic() + "': " + error);
+      detector_->reject("bad image", "'" + left_sub_.getTopic() + "': " + error);
       return;
     }
     if (!toDisparity(disparity_msg->image, raw, error))
     {
-      rejectFrame("bad disparity", "'" + disparity_sub_.getTopic() + "': " + error);
+      detector_->reject("bad disparity", "'" + disparity_sub_.getTopic() + "': " + error);
       return;
     }
     if (raw.size() != left.size())
     {
-      rejectFrame("left/disparity mismatch", "'" + left_sub_.getTopic() + "' is " + std::to_string(left.cols) + "x" +
+      detector_->reject("left/disparity mismatch", "'" + left_sub_.getTopic() + "' is " + std::to_string(left.cols) + "x" +
                                                  std::to_string(left.rows) + " but '" + disparity_sub_.getTopic() +
                                                  "' is " + std::to_string(raw.cols) + "x" + std::to_string(raw.rows) +
                                                  "; expected the disparity of the left image");
@@ -213,9 +213,10 @@ private:
     openable::FrameInput input;
     input.image = left;
     input.disparity = raw;
-    processFrame(left_msg->header, left_sub_.getTopic(), std::move(input));
+    detector_->process(left_msg->header, left_sub_.getTopic(), std::move(input));
   }
 
+  std::unique_ptr<Detector> detector_;
   bool use_disparity_ = false;
   std::unique_ptr<image_transport::ImageTransport> input_transport_;
   image_transport::SubscriberFilter left_sub_;

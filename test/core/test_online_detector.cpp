@@ -131,7 +131,9 @@ TEST(OnlineDetector, ARobotStandingStillClosesNoLoop)
   {
     ASSERT_FALSE(outcomes[t].published()) << t;
     if (t > 150)
+    {
       EXPECT_EQ(outcomes[t].status, FrameStatus::NotUnique) << t;
+    }
   }
 }
 
@@ -181,7 +183,9 @@ TEST(OnlineDetector, ExclusionInSecondsKeepsRecentFramesOut)
     input.stamp = 100.0 + i;
     outcome = detector.process(input);
     if (i > 0 && i < 30)
+    {
       EXPECT_EQ(outcome.status, FrameStatus::Excluded) << i;
+    }
   }
   EXPECT_EQ(outcome.detection.candidates, 10u);  // frames 0..9 are 30 s or more before frame 39
 }
@@ -205,7 +209,9 @@ TEST(OnlineDetector, KeyframesByDistanceAndAngle)
     const FrameOutcome moved = by_distance.process(input);
     stored_distance += moved.stored;
     if (!moved.stored)
+    {
       EXPECT_EQ(moved.status, FrameStatus::NotKeyframe);
+    }
     const double half = 0.1 * i;  // 0.2 rad a frame about z
     input.pose = {0, 0, 0, 0, 0, std::sin(half), std::cos(half)};
     stored_angle += by_angle.process(input).stored;
@@ -230,7 +236,9 @@ TEST(OnlineDetector, RequiredVerificationNeverLetsAnUnverifiedLoopThrough)
     published += flagged[t].published();
     EXPECT_FALSE(flagged[t].verified);
     if (flagged[t].published())
+    {
       EXPECT_EQ(flagged[t].verification_note, "no camera yet");
+    }
   }
   EXPECT_GT(unverified, 50);
   EXPECT_EQ(unverified, published);  // the same candidates: flagged instead of dropped
@@ -242,7 +250,9 @@ TEST(OnlineDetector, RefusesAnEmptyMapAndAMapOfAnotherConfiguration)
   EXPECT_THROW(OnlineDetector(hog, PlaceDatabase(OnlineDetector(hog).describer().layout())), Error);
   const Config ldb = shipped("paper");
   PlaceDatabase map(OnlineDetector(ldb).describer().layout(), 0, ldb.toYaml());
-  map.add(OnlineDetector(ldb).describe(FrameInput{openable_test::gardensPoint("day_right", 0)}));
+  FrameInput first;
+  first.image = openable_test::gardensPoint("day_right", 0);
+  map.add(OnlineDetector(ldb).describe(first));
   EXPECT_THROW(OnlineDetector(hog, map), Error);
   EXPECT_NO_THROW(OnlineDetector(ldb, map));
 }

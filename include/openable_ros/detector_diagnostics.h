@@ -1,0 +1,50 @@
+#pragma once
+
+#include <diagnostic_updater/DiagnosticStatusWrapper.h>
+#include <ros/time.h>
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "openable/online_detector.h"
+#include "openable_ros/ros_parameters.h"
+
+namespace openable_ros
+{
+/// What the detector counts for /diagnostics. Every input that reaches a callback is "received", whether
+/// it is then rejected or not, so the input rate is the rate at which messages arrive.
+struct FrameCounters
+{
+  uint64_t received = 0;
+  uint64_t stored = 0;
+  uint64_t skipped_keyframe = 0;
+  uint64_t loops = 0;
+  uint64_t matrix_published = 0;
+  uint64_t dropped_by_synchroniser = 0;
+  std::map<std::string, uint64_t> rejected;  ///< by reason
+  std::map<std::string, uint64_t> statuses;      ///< frames per decision status
+  std::map<std::string, uint64_t> verification;  ///< verifier outcomes ("accepted", "identical images", ...)
+  double describe_ms_last = 0.0, describe_ms_total = 0.0;
+  double match_ms_last = 0.0, match_ms_total = 0.0;
+  uint64_t timed = 0;
+
+  uint64_t rejectedTotal() const;
+  void addTimes(const openable::StageTimes& times);
+};
+
+/// Fills one /diagnostics status from the counters and the detector's state. `received_before` and
+/// `rejected_before` are the counts at the previous report (for the rates); `seconds` since then.
+class DetectorDiagnostics
+{
+public:
+  void fill(diagnostic_updater::DiagnosticStatusWrapper& status, const FrameCounters& counters,
+            const openable::OnlineDetector& detector, const RosParameters& parameters);
+
+private:
+  uint64_t received_at_last_ = 0;
+  uint64_t rejected_at_last_ = 0;
+  ros::WallTime last_ = ros::WallTime::now();
+};
+
+}  // namespace openable_ros

@@ -1,0 +1,47 @@
+#include "openable/reference_map.h"
+
+#include "openable/error.h"
+#include "openable/frame_describer.h"
+
+namespace openable
+{
+PlaceDatabase loadReferenceMap(const std::string& path, const Config& config)
+{
+  const std::string refused = "map '" + path + "' refused: ";
+  PlaceDatabase map = [&]()
+  {
+    try
+    {
+      return PlaceDatabase::load(path);
+    }
+    catch (const Error& e)
+    {
+      throw Error(refused + e.what());
+    }
+  }();
+  if (map.configYaml().empty())
+    throw Error(refused + "it carries no configuration, so its descriptors cannot be checked");
+  Config map_config;
+  try
+  {
+    map_config = Config::fromYamlString(map.configYaml());
+  }
+  catch (const Error& e)
+  {
+    throw Error(refused + "its configuration cannot be read (" + e.what() + ")");
+  }
+  std::string differences;
+  for (const auto& key : Config::descriptorKeys())
+    if (map_config.get(key) != config.get(key))
+      differences += (differences.empty() ? "" : ", ") + key + " '" + map_config.get(key) + "' (running '" +
+                     config.get(key) + "')";
+  if (!differences.empty())
+    throw Error(refused + "it was built with an incompatible configuration: " + differences);
+  if (map.layout() != FrameDescriber(config).layout())
+    throw Error(refused + "its descriptor layout differs from this detector's");
+  if (map.empty())
+    throw Error(refused + "it holds no frame; expected a map with at least one place");
+  return map;
+}
+
+}  // namespace openable

@@ -1,0 +1,390 @@
+#include "openable_ros/detector.h"
+
+#include <fstream>
+
+#include "openable/error.h"
+#include "openable/reference_map.h"
+#include "openable_ros/conversions.h"
+#include "openable_ros/live_reconfigure.h"
+#include "openable_ros/map_services.h"
+#include "openable_ros/params.h"
+
+namespace openable_ros
+{
+namespace
+{
+const double kWarnPeriod = 5.0;  // seconds between two warnings of one kind
+
+openable::OnlineOptions onlineOptions(const RosParameters& p)
+{
+  openable::OnlineOptions options;
+  options.keyframe_distance = p.keyframe_distance;
+  options.keyframe_angle = p.keyframe_angle;
+  options.verify = p.verify;
+  options.verify_required = p.verify_required;
+  options.feature_bytes = size_t(p.verify_memory * 1024.0 * 1024.0);
+  return options;
+}
+
+geometry_msgs::Point position(const std::array<double, 7>& pose)
+{
+  geometry_msgs::Point p;
+  p.x = pose[0];
+  p.y = pose[1];
+  p.z = pose[2];
+  return p;
+}
+}  // namespace
+
+Detector::Detector(ros::NodeHandle nh, ros::NodeHandle pnh, std::string name, RosParameters parameters)
+  : nh_(nh), pnh_(pnh), name_(std::move(name)), parameters_(std::move(parameters)), options_(onlineOptions(parameters_))
+{
+}
+
+Detector::~Detector()
+{
+  // Stop the timers before the members they touch go away.
+  diagnostics_timer_.stop();
+  sync_timer_.stop();
+}
+
+std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name,
+                                           const openable::Config& defaults, const RosParameters& parameters)
+{
+  std::vector<std::string> warnings;
+  const openable::Config config = loadCoreConfig(pnh, defaults, warnings);
+  warnUnknownParameters(pnh, warnings);
+  for (const auto& warning : warnings)
+    ROS_WARN_STREAM_NAMED(name, "parameter " << warning);
+
+  std::unique_ptr<Detector> d(new Detector(nh, pnh, name, parameters));
+  try
+  {
+    d->detector_ = std::make_unique<openable::OnlineDetector>(config, d->options_);
+  }
+  catch (const std::exception& e)
+  {
+    ROS_ERROR_STREAM_NAMED(name, "cannot build the detector: " << e.what() << "; this nodelet stays idle");
+    return nullptr;
+  }
+  const std::string& map_file = parameters.map_file;
+  if (!map_file.empty())
+  {
+    std::string message;
+    uint32_t frames = 0;
+    if (!std::ifstream(map_file).good())
+      ROS_INFO_STREAM_NAMED(name, "~map_file '" << map_file << "' does not exist yet; starting a new history "
+                                                << "(~save_map writes it)");
+    else if (d->loadMap(map_file, message, frames))
+      ROS_INFO_STREAM_NAMED(name, message);
+    else
+      ROS_WARN_STREAM_NAMED(name, "~map_file: " << message << "; starting a new history instead");
+  }
+  d->poses_ = std::make_unique<PoseLookup>(nh, parameters.fixed_frame, parameters.tf_timeout);
+  d->matrix_ = std::make_unique<MatrixPublisher>(nh, parameters.matrix_rate, parameters.matrix_size,
+                                                 parameters.matrix_mode, parameters.matrix_threshold_view);
+  d->markers_ = std::make_unique<LoopMarkers>(nh, parameters.fixed_frame, parameters.markers_rate);
+  d->loop_pub_ = nh.advertise<LoopClosure>("loop_closures", 100);
+  d->decisions_pub_ = nh.advertise<LoopClosure>("decisions", 100);
+  d->services_ = std::make_unique<MapServices>(pnh, *d);
+
+  Detector* self = d.get();
+  d->updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, name);
+  d->updater_->setHardwareID(name);
+  d->updater_->add("loop closure detector", [self](diagnostic_updater::DiagnosticStatusWrapper& s) { self->diagnose(s); });
+  d->diagnostics_timer_ = nh.createTimer(ros::Duration(0.1), [self](const ros::TimerEvent&) { self->updater_->update(); });
+  // Last: the server calls applyLive() at once with the values in force.
+  d->reconfigure_ = std::make_unique<LiveReconfigure>(pnh, *d, config, parameters);
+  ROS_INFO_STREAM_NAMED(name, "openable " << config.camera_type << " detector ready: " << config.descriptor
+                                          << ", patch " << config.patch_size << ", L = " << config.sequence_length
+                                          << ", min_uniqueness = " << config.min_uniqueness
+                                          << (d->detector_->localisationMode() ? ", localising against the map" : ""));
+  return d;
+}
+
+openable::Config Detector::config()
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  return detector_->config();
+}
+
+void Detector::warnThrottled(const std::string& key, double period, const std::string& message)
+{
+  if (throttle_.ready(key, ros::WallTime::now().toSec(), period))
+    ROS_WARN_STREAM_NAMED(name_, message);
+}
+
+void Detector::reject(const std::string& reason, const std::string& message)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++counters_.received;
+  ++counters_.rejected[reason];
+  warnThrottled("reject " + reason, kWarnPeriod, message + " (frame skipped)");
+}
+
+void Detector::process(const std_msgs::Header& header, const std::string& topic, openable::FrameInput input)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++counters_.received;
+  input.stamp = header.stamp.toSec();
+  input.session = uint32_t(parameters_.session);
+  input.source = topic;
+  std::string problem;
+  input.has_pose = poses_->lookup(header, input.pose, problem);
+  if (!problem.empty())
+    warnThrottled("tf", kWarnPeriod, problem);
+
+  openable::FrameOutcome outcome;
+  try
+  {
+    outcome = detector_->process(input);
+    if (!acceptStamp(header, topic, outcome, input))
+      return;
+  }
+  catch (const openable::Error& e)
+  {
+    ++counters_.rejected["cannot describe"];
+    warnThrottled("describe", kWarnPeriod, "'" + topic + "': " + e.what() + " (frame skipped)");
+    return;
+  }
+  catch (const cv::Exception& e)
+  {
+    ++counters_.rejected["OpenCV error"];
+    warnThrottled("opencv", kWarnPeriod, "'" + topic + "': OpenCV: " + e.what() + " (frame skipped)");
+    return;
+  }
+  catch (const std::exception& e)
+  {
+    // Anything else from the core must not unwind into the nodelet manager either.
+    ++counters_.rejected["unexpected error"];
+    warnThrottled("exception", kWarnPeriod, "'" + topic + "': " + e.what() + " (frame skipped)");
+    return;
+  }
+  publish(header, outcome);
+}
+
+bool Detector::acceptStamp(const std_msgs::Header& header, const std::string& topic, openable::FrameOutcome& outcome,
+                           openable::FrameInput& input)
+{
+  if (outcome.status != openable::FrameStatus::TimeJump)
+    return true;
+  std::ostringstream what;
+  what << "'" << topic << "': stamp " << header.stamp << " is before the previous frame's; expected increasing stamps";
+  if (!parameters_.reset_on_time_jump)
+  {
+    ++counters_.rejected["stamp went backwards"];
+    warnThrottled("time jump", kWarnPeriod,
+                  what.str() + "; frame skipped, history kept (set ~reset_on_time_jump to start over instead)");
+    return false;
+  }
+  warnThrottled("time jump", kWarnPeriod,
+                what.str() + " (a bag restarted?): ~reset_on_time_jump is true, resetting the history");
+  resetLocked();
+  poses_->clear();
+  outcome = detector_->process(input);
+  return true;
+}
+
+void Detector::publish(const std_msgs::Header& header, const openable::FrameOutcome& outcome)
+{
+  ++counters_.statuses[openable::toString(outcome.status)];
+  if (!outcome.stored)
+  {
+    ++counters_.skipped_keyframe;
+    return;
+  }
+  counters_.addTimes(outcome.times);
+  if (!detector_->localisationMode())
+    ++counters_.stored;
+  if (outcome.verified)
+    ++counters_.verification["accepted"];
+  else if (outcome.status == openable::FrameStatus::FailedVerification)
+    ++counters_.verification[openable::toString(outcome.verification.status)];
+  if (outcome.status == openable::FrameStatus::FailedVerification ||
+      outcome.status == openable::FrameStatus::Unverified)
+    warnThrottled("verification", kWarnPeriod,
+                  "loop closure " + std::to_string(outcome.query.id) + " -> " +
+                      std::to_string(outcome.detection.best.id) + " not published (" +
+                      openable::toString(outcome.status) + "): " + outcome.verification_note);
+  if (outcome.query.has_pose)
+    markers_->addPosition(position(outcome.query.pose));
+  if (matrix_->wanted())
+  {
+    detector_->loopDetector().lastRow(row_);
+    matrix_->addRow(detector_->loopDetector().database().firstId(), row_);
+  }
+
+  LoopClosurePtr msg = makeLoopClosure(header, outcome);
+  if (decisions_pub_.getNumSubscribers() > 0)
+    decisions_pub_.publish(LoopClosureConstPtr(msg));
+  if (outcome.published())
+  {
+    ++counters_.loops;
+    matrix_->addLoop(outcome.detection.best.id);
+    if (msg->has_poses)
+      markers_->addLoop(msg->query_pose.position, msg->match_pose.position);
+    loop_pub_.publish(LoopClosureConstPtr(msg));
+  }
+  const std::string error = matrix_->publish(header, detector_->config());
+  if (!error.empty())
+    warnThrottled("render", kWarnPeriod, error);
+  counters_.matrix_published = matrix_->published();
+  markers_->publish(header.stamp, outcome.published());
+}
+
+void Detector::setCamera(const openable::PinholeCamera& camera)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!parameters_.verify)
+    return;
+  const bool first = !detector_->hasVerifier();
+  try
+  {
+    if (!detector_->setCamera(camera))
+      warnThrottled("camera changed", 60.0, "camera_info changed after the verifier was built; keeping the first calibration");
+    else if (first)
+      ROS_INFO_STREAM_NAMED(name_, "geometric verification on: fx " << camera.fx << ", baseline " << camera.baseline
+                                                                     << " m ("
+                                                                     << (camera.stereo() ? "stereo PnP" : "mono essential")
+                                                                     << ")");
+  }
+  catch (const openable::Error& e)
+  {
+    warnThrottled("camera", 10.0, std::string("~verify: camera_info cannot be used: ") + e.what());
+  }
+}
+
+void Detector::watchSync(const std::vector<std::string>& topics, const std::string& advice)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  const double timeout = parameters_.sync_warning_timeout;
+  sync_ = std::make_unique<openable::SyncWatch>(topics, advice, timeout, ros::WallTime::now().toSec());
+  if (timeout <= 0.0)
+    return;
+  sync_timer_ = nh_.createWallTimer(ros::WallDuration(timeout),
+                                    [this](const ros::WallTimerEvent&)
+                                    {
+                                      std::lock_guard<std::mutex> lock(mutex_);
+                                      const std::string warning = sync_->check(ros::WallTime::now().toSec());
+                                      if (!warning.empty())
+                                        ROS_WARN_STREAM_NAMED(name_, warning);
+                                    });
+}
+
+void Detector::noteInput(size_t index)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (sync_)
+    sync_->noteInput(index);
+}
+
+void Detector::noteSet()
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (sync_)
+    sync_->noteSet(ros::WallTime::now().toSec());
+}
+
+void Detector::noteDropped(size_t dropped)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  counters_.dropped_by_synchroniser = dropped;
+}
+
+void Detector::resetLocked()
+{
+  detector_->reset();
+  matrix_->clear();
+  markers_->clear();
+}
+
+bool Detector::saveMap(const std::string& path, std::string& message, uint32_t& frames)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  try
+  {
+    const openable::PlaceDatabase& database = detector_->loopDetector().database();
+    database.save(path);
+    frames = uint32_t(database.size());
+    message = "saved " + std::to_string(frames) + " frames to '" + path + "'";
+    return true;
+  }
+  catch (const openable::Error& e)
+  {
+    message = "cannot save the map to '" + path + "': " + e.what();
+    return false;
+  }
+}
+
+bool Detector::loadMap(const std::string& path, std::string& message, uint32_t& frames)
+{
+  std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
+  if (matrix_)
+    lock.lock();  // not yet during create(): nothing else runs then
+  try
+  {
+    auto map = openable::loadReferenceMap(path, detector_->config());
+    frames = uint32_t(map.size());
+    detector_ = std::make_unique<openable::OnlineDetector>(detector_->config(), std::move(map), options_);
+  }
+  catch (const openable::Error& e)
+  {
+    message = e.what();
+    return false;
+  }
+  if (matrix_)
+    resetLocked();
+  message = "map '" + path + "' loaded: " + std::to_string(frames) + " frames; localising against it";
+  return true;
+}
+
+std::string Detector::reset()
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (detector_->localisationMode())
+  {
+    // Back to loop-closure mode: the map is left, the stream starts afresh (as after a restart).
+    detector_ = std::make_unique<openable::OnlineDetector>(detector_->config(), options_);
+    resetLocked();
+    return "reference map unloaded; loop-closure mode with an empty history";
+  }
+  resetLocked();
+  return "history cleared";
+}
+
+void Detector::applyLive(openable::Config& requested, RosParameters& display)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  try
+  {
+    detector_->updateConfig(requested);
+  }
+  catch (const openable::Error& e)
+  {
+    ROS_WARN_STREAM_NAMED(name_, "dynamic_reconfigure refused: " << e.what() << "; keeping the previous values");
+  }
+  requested = detector_->config();
+  if (display.matrix_mode != "whole_history" && display.matrix_mode != "rolling_window")
+  {
+    ROS_WARN_STREAM_NAMED(name_, "dynamic_reconfigure refused: matrix_mode '"
+                                     << display.matrix_mode << "' is not whole_history | rolling_window; keeping "
+                                     << parameters_.matrix_mode);
+    display.matrix_mode = parameters_.matrix_mode;
+  }
+  const std::string error = matrix_->setOptions(display.matrix_rate, display.matrix_size, display.matrix_mode,
+                                                display.matrix_threshold_view);
+  if (!error.empty())
+    ROS_WARN_STREAM_NAMED(name_, error);
+  parameters_.matrix_rate = display.matrix_rate;
+  parameters_.matrix_size = display.matrix_size;
+  parameters_.matrix_mode = display.matrix_mode;
+  parameters_.matrix_threshold_view = display.matrix_threshold_view;
+}
+
+void Detector::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  diagnostics_.fill(status, counters_, *detector_, parameters_);
+}
+
+}  // namespace openable_ros

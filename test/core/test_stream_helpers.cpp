@@ -1,0 +1,146 @@
+// The ROS-free helpers the nodelets use: throttling, the sync watchdog's decision, the camera-ring
+// synchroniser, "did you mean" names, and loading a reference map.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <unistd.h>
+
+#include "openable/config.h"
+#include "openable/error.h"
+#include "openable/frame_describer.h"
+#include "openable/reference_map.h"
+#include "openable/ring_sync.h"
+#include "openable/sync_watch.h"
+#include "openable/throttle.h"
+#include "test_util.h"
+
+using namespace openable;
+
+TEST(Throttle, OncePerPeriodPerKey)
+{
+  Throttle t;
+  EXPECT_TRUE(t.ready("a", 0.0, 5.0));
+  EXPECT_FALSE(t.ready("a", 4.9, 5.0));
+  EXPECT_TRUE(t.ready("b", 4.9, 5.0));  // keys do not silence each other
+  EXPECT_TRUE(t.ready("a", 5.0, 5.0));
+  EXPECT_FALSE(t.ready("a", 9.0, 5.0));
+}
+
+TEST(SyncWatch, WarnsWhenMessagesDoNotPairUpOnceUntilNewOnesArrive)
+{
+  SyncWatch w({"left", "right"}, "set approximate_sync", 5.0, 0.0);
+  EXPECT_EQ(w.check(4.0), "");  // not quiet for long enough yet
+  const std::string nothing = w.check(6.0);
+  EXPECT_NE(nothing.find("Check that the topics are published"), std::string::npos) << nothing;
+  w.noteInput(0);
+  w.noteInput(0);
+  w.noteInput(1);
+  const std::string unpaired = w.check(12.0);
+  EXPECT_NE(unpaired.find("'left' 2, 'right' 1"), std::string::npos) << unpaired;
+  EXPECT_NE(unpaired.find("set approximate_sync"), std::string::npos) << unpaired;
+  EXPECT_EQ(w.check(18.0), "") << "the stream stopped: no repeat without new messages";
+  w.noteInput(1);
+  EXPECT_NE(w.check(24.0), "");
+}
+
+TEST(SyncWatch, AStreamThatWorkedAndStoppedIsNotWarnedAbout)
+{
+  SyncWatch w({"left", "right"}, "advice", 1.0, 0.0);
+  w.noteInput(0);
+  w.noteInput(1);
+  w.noteSet(0.5);
+  EXPECT_EQ(w.check(10.0), "");
+  EXPECT_EQ(w.sets(), 1u);
+  SyncWatch off({"a"}, "advice", 0.0, 0.0);
+  EXPECT_EQ(off.check(1e6), "");  // timeout 0: never
+}
+
+TEST(RingSync, CompletesASetWithinTheSkewAndDropsWhatIsBehindIt)
+{
+  using Ring = RingSync<double>;
+  Ring ring(3, 4, 0.01, [](const double& stamp) { return stamp; });
+  Ring::Set set;
+  EXPECT_FALSE(ring.add(0, 1.000, set));
+  EXPECT_FALSE(ring.add(1, 1.005, set));
+  EXPECT_FALSE(ring.add(0, 2.000, set));
+  ASSERT_TRUE(ring.add(2, 0.995, set));
+  EXPECT_EQ(set, (Ring::Set{1.000, 1.005, 0.995}));
+  EXPECT_FALSE(ring.add(1, 2.5, set));  // 2.0 waits; 2.5 is too far from it
+  EXPECT_FALSE(ring.add(2, 2.0, set));
+  ASSERT_TRUE(ring.add(1, 2.0, set));
+  EXPECT_EQ(set, (Ring::Set{2.0, 2.0, 2.0}));
+  for (int i = 0; i < 6; ++i)
+    ring.add(0, 10.0 + i, set);
+  EXPECT_EQ(ring.dropped(), 2u);  // queue of 4
+}
+
+TEST(RingSync, EqualsANaiveSearchOnRandomArrivals)
+{
+  // Property: whenever a set completes, every member lies within max_skew of the newest arrival and no
+  // input's member is older than one already used.
+  std::mt19937 rng(3);
+  RingSync<double> ring(4, 8, 0.02, [](const double& s) { return s; });
+  std::vector<double> last_used(4, -1.0);
+  RingSync<double>::Set set;
+  for (int i = 0; i < 2000; ++i)
+  {
+    const size_t input = std::uniform_int_distribution<size_t>(0, 3)(rng);
+    const double stamp = 0.1 * (i / 4) + std::uniform_real_distribution<double>(-0.015, 0.015)(rng);
+    if (!ring.add(input, stamp, set))
+      continue;
+    for (size_t c = 0; c < 4; ++c)
+    {
+      EXPECT_LE(std::fabs(set[c] - stamp), 0.02 + 1e-9);
+      EXPECT_GT(set[c], last_used[c]);
+      last_used[c] = set[c];
+    }
+  }
+}
+
+TEST(ClosestName, SuggestsTheNearestKnownName)
+{
+  EXPECT_EQ(closestName("treshold", {"threshold", "top_k", "sequence_length"}), "threshold");
+  EXPECT_EQ(closestName("sequence_lenght", {"threshold", "sequence_length"}), "sequence_length");
+  EXPECT_EQ(closestName("x", {}), "");
+  Config c;
+  try
+  {
+    c.set("treshold", "0.1");
+    FAIL();
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("did you mean 'threshold'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ReferenceMap, LoadsACompatibleMapAndRefusesOthersNamingWhy)
+{
+  const std::string dir = ::testing::TempDir();
+  const Config config;
+  const FrameDescriber describer(config);
+  PlaceDatabase map(describer.layout(), 0, config.toYaml());
+  map.add(describer.describeImage(openable_test::gardensPoint("day_right", 0)));
+  const std::string good = dir + "/reference_" + std::to_string(::getpid()) + ".map";
+  map.save(good);
+  EXPECT_EQ(loadReferenceMap(good, config).size(), 1u);
+
+  Config other = config;
+  other.patch_size = 32;
+  try
+  {
+    loadReferenceMap(good, other);
+    FAIL();
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("patch_size '64' (running '32')"), std::string::npos) << e.what();
+  }
+  PlaceDatabase empty(describer.layout(), 0, config.toYaml());
+  const std::string none = good + ".empty";
+  empty.save(none);
+  EXPECT_THROW(loadReferenceMap(none, config), Error);
+  EXPECT_THROW(loadReferenceMap(good + ".missing", config), Error);
+  std::remove(good.c_str());
+  std::remove(none.c_str());
+}

@@ -1,0 +1,162 @@
+// The ROS adapters' helpers, without a ROS master: the ROS-only parameter table against config/ros.yaml
+// and doc/ros_api.md, image conversions for every encoding, and dynamic_reconfigure <-> core keys.
+#include <gtest/gtest.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <boost/make_shared.hpp>
+#include <fstream>
+#include <regex>
+#include <string>
+
+#include "openable/config.h"
+#include "openable_ros/DetectorConfig.h"
+#include "openable_ros/conversions.h"
+#include "openable_ros/live_reconfigure.h"
+#include "openable_ros/ros_parameters.h"
+
+namespace enc = sensor_msgs::image_encodings;
+using openable_ros::rosParameterTable;
+
+namespace
+{
+std::string readFile(const std::string& relative)
+{
+  std::ifstream in(std::string(OPENABLE_SOURCE_DIR) + "/" + relative);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::string unquoted(std::string s)
+{
+  s.erase(std::remove(s.begin(), s.end(), '"'), s.end());
+  return s;
+}
+
+/// "5.0" and "5" are the same default; words compare as words.
+bool sameValue(const std::string& a, const std::string& b)
+{
+  try
+  {
+    size_t used_a = 0, used_b = 0;
+    const double x = std::stod(a, &used_a), y = std::stod(b, &used_b);
+    if (used_a == a.size() && used_b == b.size())
+      return x == y;
+  }
+  catch (const std::exception&)
+  {
+  }
+  return unquoted(a) == unquoted(b);
+}
+
+sensor_msgs::ImagePtr image(const std::string& encoding, int cv_type, int channels_bytes)
+{
+  auto msg = boost::make_shared<sensor_msgs::Image>();
+  msg->encoding = encoding;
+  msg->width = 8;
+  msg->height = 4;
+  msg->step = 8 * uint32_t(channels_bytes);
+  msg->data.assign(msg->step * msg->height, 100);
+  (void)cv_type;
+  return msg;
+}
+}  // namespace
+
+TEST(RosParameters, RosYamlListsEveryParameterWithItsDefault)
+{
+  const std::string yaml = readFile("config/ros.yaml");
+  for (const auto& p : rosParameterTable())
+  {
+    // "name: value" at the start of a line, or commented for one nodelet kind ("#   name: value").
+    const std::regex line("(^|\\n)(#\\s+)?" + p.name + ":\\s*([^#\\n]*?)\\s*(#|\\n)");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(yaml, m, line)) << p.name << " is missing from config/ros.yaml";
+    EXPECT_TRUE(sameValue(m[3], p.default_value)) << p.name << ": ros.yaml says " << m[3] << ", the table "
+                                                  << p.default_value;
+  }
+}
+
+TEST(RosParameters, DocTableHoldsEveryCommonParameterWithItsDefault)
+{
+  const std::string doc = readFile("doc/ros_api.md");
+  for (const auto& p : rosParameterTable())
+  {
+    if (p.nodelets != "all")
+    {
+      EXPECT_NE(doc.find("`~" + p.name + "`"), std::string::npos) << p.name << " is not documented";
+      continue;
+    }
+    const std::regex row("\\| `~" + p.name + "` \\| (\\w+) \\| ([^|]*?) \\|");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(doc, m, row)) << p.name << " has no row in doc/ros_api.md";
+    EXPECT_EQ(m[1], p.type) << p.name;
+    EXPECT_TRUE(sameValue(m[2], p.default_value)) << p.name << ": doc says " << m[2] << ", the table "
+                                                  << p.default_value;
+  }
+}
+
+TEST(RosParameters, NoNameInBothTables)
+{
+  for (const auto& p : rosParameterTable())
+    for (const auto& key : openable::Config::keys())
+      EXPECT_NE(p.name, key.name) << "a ROS-only parameter shadows a core key";
+}
+
+TEST(Conversions, EveryEncodingIsConvertedOrRefusedWithAReason)
+{
+  struct Case
+  {
+    std::string encoding;
+    int bytes_per_pixel;
+    bool accepted;
+    int channels;
+  };
+  const std::vector<Case> cases = {
+      {enc::MONO8, 1, true, 1},  {enc::TYPE_8UC1, 1, true, 1}, {enc::BGR8, 3, true, 3},
+      {enc::RGB8, 3, true, 3},   {enc::TYPE_8UC3, 3, true, 3}, {enc::BGRA8, 4, true, 3},
+      {enc::RGBA8, 4, true, 3},  {enc::TYPE_8UC4, 4, true, 3}, {enc::MONO16, 2, true, 1},
+      {enc::TYPE_16UC1, 2, false, 0}, {enc::TYPE_32FC1, 4, false, 0}, {"yuv422", 2, false, 0},
+  };
+  for (const auto& c : cases)
+  {
+    cv::Mat out;
+    std::string error;
+    const bool ok = openable_ros::toCoreImage(image(c.encoding, 0, c.bytes_per_pixel), out, error);
+    EXPECT_EQ(ok, c.accepted) << c.encoding << ": " << error;
+    if (ok)
+    {
+      EXPECT_EQ(out.channels(), c.channels) << c.encoding;
+      EXPECT_EQ(out.depth(), CV_8U) << c.encoding;
+      EXPECT_EQ(out.size(), cv::Size(8, 4)) << c.encoding;
+    }
+    else
+    {
+      EXPECT_NE(error.find(c.encoding), std::string::npos) << "the reason names the encoding: " << error;
+    }
+  }
+  // Too little data for the stated size.
+  auto short_msg = image(enc::MONO8, 0, 1);
+  short_msg->data.resize(3);
+  cv::Mat out;
+  std::string error;
+  EXPECT_FALSE(openable_ros::toCoreImage(short_msg, out, error));
+  EXPECT_FALSE(error.empty());
+}
+
+TEST(LiveReconfigure, LiveCoreKeysGoBothWaysByName)
+{
+  openable_ros::DetectorConfig start;
+  dynamic_reconfigure::Config message;
+  start.__toMessage__(message);
+  openable::Config config;
+  config.threshold = 0.25;
+  config.sequence_length = 7;
+  config.min_candidates = 12;
+  config.bidirectional = true;
+  openable_ros::LiveReconfigure::fromCore(config, message);
+  openable::Config back;
+  openable_ros::LiveReconfigure::toCore(message, back);
+  for (const auto& key : openable::Config::liveKeys())
+    EXPECT_EQ(back.get(key), config.get(key)) << key;
+  EXPECT_TRUE(start.__fromMessage__(message));
+  EXPECT_DOUBLE_EQ(start.threshold, 0.25);
+  EXPECT_EQ(start.min_candidates, 12);
+}
