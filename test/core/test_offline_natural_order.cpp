@@ -28,7 +28,7 @@ int runOffline(const std::string& input, const std::string& output)
 {
   const std::string command = std::string("'") + OPENABLE_OFFLINE_BINARY + "' --config '" + OPENABLE_SOURCE_DIR +
                               "/config/paper.yaml' --reference '" + input + "' --output '" + output +
-                              "' --set sequence_length=3 --set exclusion_window=2 >'" + output + ".log' 2>&1";
+                              "' --set sequence_length=2 --set exclusion_window=2 >'" + output + ".log' 2>&1";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
