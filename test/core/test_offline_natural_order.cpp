@@ -77,8 +77,8 @@ TEST(OfflineNaturalOrder, UnpaddedNamesGiveTheMatrixOfPaddedNames)
   ASSERT_EQ(unpadded.rows, kFrames);
   int finite = 0;
   EXPECT_TRUE(sameMatrix(unpadded, padded, finite));
-  // Enough compared cells that a reordering of frames would show (55 of 225 measured: frames without a
-  // full sequence of 3 or inside the exclusion window compare nothing).
+  // Enough compared cells that a reordering of frames would show (78 of 225 measured: frames without a
+  // full sequence of 2 or inside the exclusion window compare nothing).
   EXPECT_GE(finite, kFrames * 3);
   fs::remove_all(root);
 }
