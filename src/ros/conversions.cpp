@@ -53,7 +53,18 @@ bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::str
     }
     else if (e == enc::MONO16)
     {
-      image = cv_bridge::toCvCopy(msg, enc::MONO8)->image;
+      // Either byte order (is_bigendian), the top 8 bits kept.
+      cv::Mat raw(int(msg->height), int(msg->width), CV_16UC1, const_cast<uint8_t*>(msg->data.data()), msg->step);
+      cv::Mat native = raw.clone();
+      const bool host_big_endian = cv::Mat(1, 1, CV_16UC1, cv::Scalar(1)).data[0] == 0;
+      if (bool(msg->is_bigendian) != host_big_endian)
+        for (int r = 0; r < native.rows; ++r)
+        {
+          uint16_t* row = native.ptr<uint16_t>(r);
+          for (int c = 0; c < native.cols; ++c)
+            row[c] = uint16_t((row[c] >> 8) | (row[c] << 8));
+        }
+      native.convertTo(image, CV_8U, 1.0 / 256.0);
     }
     else if (e == enc::TYPE_8UC4)
     {

@@ -160,3 +160,22 @@ TEST(LiveReconfigure, LiveCoreKeysGoBothWaysByName)
   EXPECT_DOUBLE_EQ(start.threshold, 0.25);
   EXPECT_EQ(start.min_candidates, 12);
 }
+
+TEST(Conversions, Mono16InEitherByteOrderKeepsItsTopByte)
+{
+  for (const bool big_endian : {false, true})
+  {
+    auto msg = image(enc::MONO16, 0, 2);
+    msg->is_bigendian = big_endian;
+    for (size_t i = 0; i + 1 < msg->data.size(); i += 2)
+    {
+      // 0x1234 in the message's byte order.
+      msg->data[i] = big_endian ? 0x12 : 0x34;
+      msg->data[i + 1] = big_endian ? 0x34 : 0x12;
+    }
+    cv::Mat out;
+    std::string error;
+    ASSERT_TRUE(openable_ros::toCoreImage(msg, out, error)) << error;
+    EXPECT_EQ(out.at<uint8_t>(2, 3), 0x12) << (big_endian ? "big" : "little") << "-endian";
+  }
+}
