@@ -2,8 +2,8 @@
 
 #include <cstdint>
 #include <memory>
-#include <string>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "openable/config.h"

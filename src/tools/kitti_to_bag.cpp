@@ -234,9 +234,10 @@ std::string poseProblem(const Projection& p)
 {
   if (!allFinite(p))
     return "holds a NaN or infinite number";
-  const auto dot = [&p](int a, int b) { return p[4 * a] * p[4 * b] + p[4 * a + 1] * p[4 * b + 1] + p[4 * a + 2] * p[4 * b + 2]; };
-  const double det = p[0] * (p[5] * p[10] - p[6] * p[9]) - p[1] * (p[4] * p[10] - p[6] * p[8]) +
-                     p[2] * (p[4] * p[9] - p[5] * p[8]);
+  const auto dot = [&p](int a, int b)
+  { return p[4 * a] * p[4 * b] + p[4 * a + 1] * p[4 * b + 1] + p[4 * a + 2] * p[4 * b + 2]; };
+  const double det =
+      p[0] * (p[5] * p[10] - p[6] * p[9]) - p[1] * (p[4] * p[10] - p[6] * p[8]) + p[2] * (p[4] * p[9] - p[5] * p[8]);
   const double tolerance = 1e-3;
   for (int a = 0; a < 3; ++a)
     for (int b = a; b < 3; ++b)

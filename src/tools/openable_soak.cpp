@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <random>
 #include <string>
@@ -84,9 +85,12 @@ void soak(const Options& o)
   const int tail_bits = layout.cell_length % 64;
   const uint64_t last_word_mask = tail_bits ? (uint64_t(1) << tail_bits) - 1 : ~uint64_t(0);
 
-  std::cout << "max_history " << o.max_history << (o.max_history ? "" : " (unbounded)") << ": " << layout.frameWords() * 8
-            << "-byte descriptors\n"
+  std::cout << "max_history " << o.max_history << (o.max_history ? "" : " (unbounded)") << ": "
+            << layout.frameWords() * 8 << "-byte descriptors\n"
             << "  frames   stored   RSS MB   bytes/frame since first report   s\n";
+  // Before any frame: the libraries and the detector's fixed buffers, the floor every figure stands on.
+  std::cout << "       0        0  " << std::fixed << std::setprecision(1) << std::setw(7) << residentBytes() / 1e6
+            << "\n";
   const auto start = std::chrono::steady_clock::now();
   size_t first_rss = 0, first_frame = 0;
   for (size_t frame = 1; frame <= o.frames; ++frame)
@@ -108,8 +112,8 @@ void soak(const Options& o)
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     char line[160];
     std::snprintf(line, sizeof(line), "  %6zu  %7zu  %7.1f   %30.0f   %5.1f\n", frame, detector.database().size(),
-                  rss / 1e6, frame > first_frame ? (double(rss) - double(first_rss)) / double(frame - first_frame) : 0.0,
-                  seconds);
+                  rss / 1e6,
+                  frame > first_frame ? (double(rss) - double(first_rss)) / double(frame - first_frame) : 0.0, seconds);
     std::cout << line << std::flush;
   }
 }

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "openable/error.h"
 #include "memory_limit.h"
+#include "openable/error.h"
 #include "openable/evaluation.h"
 
 namespace fs = std::filesystem;
@@ -662,12 +662,8 @@ TEST(GroundTruthHardening, FarPairCostsOneEntryAndIsRefusedByTheShapeCheck)
 {
   TempDir dir;
   const std::string path = dir.file("far.txt", "50000000 0\n");
-  const auto run = openable_test::runWithMemoryLimit(
-      128 << 20,
-      [&]
-      {
-        openable::loadPairsGroundTruth(path).checkFits(4, 4);
-      });
+  const auto run =
+      openable_test::runWithMemoryLimit(128 << 20, [&] { openable::loadPairsGroundTruth(path).checkFits(4, 4); });
   EXPECT_EQ(run.outcome, openable_test::LimitedRun::kOpenableError) << run.message;
   EXPECT_NE(run.message.find("needs at least 50000001x1"), std::string::npos) << run.message;
 }

@@ -156,12 +156,12 @@ TEST(MapHardening, MoreFramesThanTheCapacityAreRefused)
   std::string payload;
   for (int frame = 0; frame < 2; ++frame)
   {
-    put<uint64_t>(payload, frame);               // id
-    put<double>(payload, 0.0);                   // stamp
-    put<uint32_t>(payload, 0);                   // session
-    payload.push_back('\0');                     // pose flag
-    payload.append(7 * sizeof(double), '\0');    // pose
-    put<uint64_t>(payload, 0);                   // source name: empty
+    put<uint64_t>(payload, frame);             // id
+    put<double>(payload, 0.0);                 // stamp
+    put<uint32_t>(payload, 0);                 // session
+    payload.push_back('\0');                   // pose flag
+    payload.append(7 * sizeof(double), '\0');  // pose
+    put<uint64_t>(payload, 0);                 // source name: empty
   }
   payload.append(2 * sizeof(uint64_t), '\0');  // descriptors
   const std::string path = writeTemp("capacity.map", craftMap(64, 1, 1, 2, payload));

@@ -24,8 +24,7 @@ class TemporaryFile
 {
 public:
   TemporaryFile(const uint8_t* data, size_t size, const char* extension)
-    : path_((std::filesystem::temp_directory_path() /
-             ("openable_fuzz_" + std::to_string(::getpid()) + extension))
+    : path_((std::filesystem::temp_directory_path() / ("openable_fuzz_" + std::to_string(::getpid()) + extension))
                 .string())
   {
     FILE* file = std::fopen(path_.c_str(), "wb");
