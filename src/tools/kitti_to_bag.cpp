@@ -17,6 +17,7 @@
 #include <dirent.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
+#include <cv_bridge/cv_bridge.h>
 #include <ros/time.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -25,6 +26,7 @@
 #include <tf2_msgs/TFMessage.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <boost/make_shared.hpp>
@@ -44,6 +46,7 @@
 #include <string>
 #include <vector>
 
+#include "openable/kitti.h"
 #include "openable/progress.h"
 
 namespace
@@ -157,223 +160,19 @@ bool isFile(const std::string& path)
 }
 
 // Frame index -> file name of every NNNNNN.png in a KITTI image folder.
-std::map<long, std::string> listImages(const std::string& dir)
+using Projection = openable::KittiMatrix;
+
+/// A KITTI pose or offset as an Eigen transform.
+Eigen::Isometry3d toIsometry(const Projection& pose)
 {
-  std::map<long, std::string> images;
-  DIR* d = opendir(dir.c_str());
-  if (!d)
-    return images;
-  while (dirent* entry = readdir(d))
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
   {
-    const std::string name = entry->d_name;
-    if (name.size() < 5 || name.substr(name.size() - 4) != ".png")
-      continue;
-    const std::string stem = name.substr(0, name.size() - 4);
-    if (stem.empty() || !std::all_of(stem.begin(), stem.end(), ::isdigit))
-      continue;
-    // Frame numbers become the uint32 header.seq; a longer digit string is not a KITTI frame.
-    errno = 0;
-    const unsigned long long index = std::strtoull(stem.c_str(), nullptr, 10);
-    if (errno == ERANGE || index > UINT32_MAX)
-    {
-      closedir(d);
-      throw std::runtime_error(dir + "/" + name + ": frame number " + stem + " is too large (expected at most " +
-                               std::to_string(UINT32_MAX) + ", KITTI names frames NNNNNN.png)");
-    }
-    images[static_cast<long>(index)] = name;
+    for (int c = 0; c < 3; ++c)
+      t.linear()(r, c) = pose[size_t(4 * r + c)];
+    t.translation()(r) = pose[size_t(4 * r + 3)];
   }
-  closedir(d);
-  return images;
-}
-
-using Projection = std::array<double, 12>;
-
-bool allFinite(const Projection& p)
-{
-  return std::all_of(p.begin(), p.end(), [](double v) { return std::isfinite(v); });
-}
-
-// A projection matrix P = K [I | t] of a rectified camera: finite, with positive focal lengths (the
-// camera offsets divide by them).
-std::map<std::string, Projection> readCalibration(const std::string& path)
-{
-  std::ifstream in(path);
-  std::map<std::string, Projection> matrices;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line))
-  {
-    ++number;
-    const auto colon = line.find(':');
-    if (colon == std::string::npos)
-      continue;
-    const std::string key = line.substr(0, colon);
-    if (key.size() != 2 || key[0] != 'P')
-      continue;  // Tr (velodyne -> camera) and anything else: not needed
-    std::istringstream fields(line.substr(colon + 1));
-    Projection p;
-    for (double& v : p)
-      if (!(fields >> v))
-        throw std::runtime_error(path + ":" + std::to_string(number) + ": " + key + " has fewer than 12 numbers");
-    if (!allFinite(p))
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": " + key +
-                               " holds a NaN or infinite number; expected a finite 3x4 projection matrix");
-    if (!(p[0] > 0.0) || !(p[5] > 0.0))
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": " + key + " has focal lengths fx " +
-                               std::to_string(p[0]) + ", fy " + std::to_string(p[5]) +
-                               "; expected positive ones (P = K [I | t])");
-    matrices[key] = p;
-  }
-  return matrices;
-}
-
-// Why a 3x4 pose [R | t] cannot be one, or "" when it is: finite numbers and R a rotation (rows of unit
-// length, orthogonal, determinant +1), to KITTI's 7 printed digits. A zero or scaled R would become a
-// zero or meaningless quaternion in /tf.
-std::string poseProblem(const Projection& p)
-{
-  if (!allFinite(p))
-    return "holds a NaN or infinite number";
-  const auto dot = [&p](int a, int b)
-  { return p[4 * a] * p[4 * b] + p[4 * a + 1] * p[4 * b + 1] + p[4 * a + 2] * p[4 * b + 2]; };
-  const double det =
-      p[0] * (p[5] * p[10] - p[6] * p[9]) - p[1] * (p[4] * p[10] - p[6] * p[8]) + p[2] * (p[4] * p[9] - p[5] * p[8]);
-  const double tolerance = 1e-3;
-  for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b)
-      if (std::abs(dot(a, b) - (a == b ? 1.0 : 0.0)) > tolerance)
-        return "has a rotation part that is not a rotation (rows not orthonormal)";
-  if (std::abs(det - 1.0) > tolerance)
-    return "has a rotation part with determinant " + std::to_string(det) + " (expected 1)";
-  return "";
-}
-
-// Stamps are offset + time; ROS times hold seconds in 32 bits, so both must stay below 2^32 s.
-std::vector<double> readTimes(const std::string& path, double offset)
-{
-  std::ifstream in(path);
-  std::vector<double> times;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line))
-  {
-    ++number;
-    if (line.find_first_not_of(" \t\r") == std::string::npos)
-      continue;
-    std::istringstream fields(line);
-    double t;
-    if (!(fields >> t) || !std::isfinite(t) || t < 0.0)
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": '" + line + "' is not a time in seconds >= 0");
-    if (offset + t >= 4294967296.0)
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": time " + std::to_string(t) +
-                               " s plus --time-offset " + std::to_string(offset) +
-                               " s is past the largest ROS time (2^32 s)");
-    if (!times.empty() && t < times.back())
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": time " + std::to_string(t) +
-                               " goes backwards (previous " + std::to_string(times.back()) + ")");
-    times.push_back(t);
-  }
-  return times;
-}
-
-// Rows of 12 numbers: camera-0 pose of each frame in the first camera-0 frame, row-major [R | t].
-// `lines` gets the line number of each pose, for errors found later.
-std::vector<Projection> readPoses(const std::string& path, std::vector<int>& lines)
-{
-  std::ifstream in(path);
-  if (!in || !isFile(path))
-    throw std::runtime_error("cannot read poses file " + path + " (expected a regular file)");
-  std::vector<Projection> poses;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line))
-  {
-    ++number;
-    if (line.find_first_not_of(" \t\r") == std::string::npos)
-      continue;
-    std::istringstream fields(line);
-    Projection p;
-    for (double& v : p)
-      if (!(fields >> v))
-        throw std::runtime_error(path + ":" + std::to_string(number) + ": expected 12 numbers (a 3x4 pose [R|t])");
-    const std::string problem = poseProblem(p);
-    if (!problem.empty())
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": the pose " + problem);
-    poses.push_back(p);
-    lines.push_back(number);
-  }
-  return poses;
-}
-
-// Rigid transform as 3x3 rotation + translation (row-major), enough for what the converter composes.
-struct Rigid
-{
-  double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  double t[3] = {0, 0, 0};
-
-  Rigid operator*(const Rigid& o) const
-  {
-    Rigid out;
-    for (int i = 0; i < 3; ++i)
-    {
-      for (int j = 0; j < 3; ++j)
-        out.r[3 * i + j] = r[3 * i] * o.r[j] + r[3 * i + 1] * o.r[3 + j] + r[3 * i + 2] * o.r[6 + j];
-      out.t[i] = r[3 * i] * o.t[0] + r[3 * i + 1] * o.t[1] + r[3 * i + 2] * o.t[2] + t[i];
-    }
-    return out;
-  }
-};
-
-geometry_msgs::Quaternion toQuaternion(const double* m)
-{
-  // Shepperd's method: pick the largest of w, x, y, z to divide by (numerically stable for any rotation).
-  geometry_msgs::Quaternion q;
-  const double trace = m[0] + m[4] + m[8];
-  if (trace > 0.0)
-  {
-    const double s = 2.0 * std::sqrt(trace + 1.0);
-    q.w = 0.25 * s;
-    q.x = (m[7] - m[5]) / s;
-    q.y = (m[2] - m[6]) / s;
-    q.z = (m[3] - m[1]) / s;
-  }
-  else if (m[0] > m[4] && m[0] > m[8])
-  {
-    const double s = 2.0 * std::sqrt(1.0 + m[0] - m[4] - m[8]);
-    q.w = (m[7] - m[5]) / s;
-    q.x = 0.25 * s;
-    q.y = (m[1] + m[3]) / s;
-    q.z = (m[2] + m[6]) / s;
-  }
-  else if (m[4] > m[8])
-  {
-    const double s = 2.0 * std::sqrt(1.0 + m[4] - m[0] - m[8]);
-    q.w = (m[2] - m[6]) / s;
-    q.x = (m[1] + m[3]) / s;
-    q.y = 0.25 * s;
-    q.z = (m[5] + m[7]) / s;
-  }
-  else
-  {
-    const double s = 2.0 * std::sqrt(1.0 + m[8] - m[0] - m[4]);
-    q.w = (m[3] - m[1]) / s;
-    q.x = (m[2] + m[6]) / s;
-    q.y = (m[5] + m[7]) / s;
-    q.z = 0.25 * s;
-  }
-  const double n = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
-  q.w /= n, q.x /= n, q.y /= n, q.z /= n;
-  return q;
-}
-
-// The camera centre offset t of a rectified P = K [I | t]: t = K^-1 * P(:, 3).
-std::array<double, 3> projectionOffset(const Projection& p)
-{
-  const double fx = p[0], cx = p[2], fy = p[5], cy = p[6];
-  const double tz = p[11];
-  const double ty = (p[7] - cy * tz) / fy;
-  const double tx = (p[3] - cx * tz) / fx;
-  return {tx, ty, tz};
+  return t;
 }
 
 sensor_msgs::CameraInfo cameraInfo(const Projection& p, double tx_metres, const cv::Size& size,
@@ -393,19 +192,11 @@ sensor_msgs::CameraInfo cameraInfo(const Projection& p, double tx_metres, const 
   return info;
 }
 
-sensor_msgs::Image toImage(const cv::Mat& image, const std::string& frame)
+sensor_msgs::ImagePtr toImage(const cv::Mat& image, const std::string& frame)
 {
-  sensor_msgs::Image msg;
-  msg.header.frame_id = frame;
-  msg.height = static_cast<uint32_t>(image.rows);
-  msg.width = static_cast<uint32_t>(image.cols);
-  msg.encoding = image.channels() == 1 ? "mono8" : "bgr8";
-  msg.is_bigendian = 0;
-  msg.step = static_cast<uint32_t>(image.cols * image.elemSize());
-  msg.data.resize(static_cast<size_t>(msg.step) * image.rows);
-  for (int r = 0; r < image.rows; ++r)
-    std::memcpy(&msg.data[static_cast<size_t>(r) * msg.step], image.ptr(r), msg.step);
-  return msg;
+  std_msgs::Header header;
+  header.frame_id = frame;
+  return cv_bridge::CvImage(header, image.channels() == 1 ? "mono8" : "bgr8", image).toImageMsg();
 }
 
 ros::Time stampOf(double seconds)
@@ -450,7 +241,7 @@ int run(const Options& o, bool& bag_opened)
     throw std::runtime_error(text);
   }
 
-  const auto calibration = readCalibration(dir + "calib.txt");
+  const auto calibration = openable::readKittiCalibration(dir + "calib.txt");
   const std::string left_key = o.color ? "P2" : "P0";
   const std::string right_key = o.color ? "P3" : "P1";
   for (const auto& key : {left_key, right_key})
@@ -458,8 +249,8 @@ int run(const Options& o, bool& bag_opened)
       throw std::runtime_error(dir + "calib.txt has no " + key +
                                " (expected lines 'P0: ...' to 'P3: ...' with 12 numbers)");
 
-  const auto times = readTimes(dir + "times.txt", o.time_offset);
-  const auto left_images = listImages(dir + left_dir);
+  const auto times = openable::readKittiTimes(dir + "times.txt", o.time_offset);
+  const auto left_images = openable::listKittiImages(dir + left_dir);
   if (left_images.empty())
     throw std::runtime_error(dir + left_dir + "/ has no NNNNNN.png images");
   // Frame indices must be contiguous from the first one found.
@@ -485,7 +276,7 @@ int run(const Options& o, bool& bag_opened)
   std::map<long, std::string> right_images;
   if (o.stereo)
   {
-    right_images = listImages(dir + right_dir);
+    right_images = openable::listKittiImages(dir + right_dir);
     for (const auto& entry : left_images)
       if (!right_images.count(entry.first))
         throw std::runtime_error("stereo: " + dir + right_dir + "/" + entry.second + " is missing (" + left_dir +
@@ -505,7 +296,9 @@ int run(const Options& o, bool& bag_opened)
   std::vector<int> pose_lines;
   if (!o.poses.empty())
   {
-    poses = readPoses(o.poses, pose_lines);
+    openable::KittiPoses read = openable::readKittiPoses(o.poses);
+    poses = std::move(read.poses);
+    pose_lines = std::move(read.lines);
     if (static_cast<long>(poses.size()) <= last)
       throw std::runtime_error("pose/frame count mismatch: " + o.poses + " has " + std::to_string(poses.size()) +
                                " poses, frame " + std::to_string(last) + " needs at least " + std::to_string(last + 1));
@@ -515,18 +308,16 @@ int run(const Options& o, bool& bag_opened)
   // z forward). `odom` is a ROS body frame (x forward, y left, z up) at the first camera-0 pose, so the
   // trajectory lies in rviz's ground plane; `camera_left` is the optical frame of the left camera used
   // (camera 0, or camera 2 with --color, offset from camera 0 by its P).
-  Rigid odom_T_cam0start;
-  const double body_from_optical[9] = {0, 0, 1, -1, 0, 0, 0, -1, 0};
-  std::copy(body_from_optical, body_from_optical + 9, odom_T_cam0start.r);
+  Eigen::Isometry3d odom_T_cam0start = Eigen::Isometry3d::Identity();
+  odom_T_cam0start.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   const Projection& p_left = calibration.at(left_key);
-  const auto offset_left = projectionOffset(p_left);  // p_camL = p_cam0 + offset
-  Rigid cam0_T_left;
-  for (int i = 0; i < 3; ++i)
-    cam0_T_left.t[i] = -offset_left[i];
+  const auto offset_left = openable::kittiProjectionOffset(p_left);  // p_camL = p_cam0 + offset
+  Eigen::Isometry3d cam0_T_left = Eigen::Isometry3d::Identity();
+  cam0_T_left.translation() = -Eigen::Vector3d(offset_left[0], offset_left[1], offset_left[2]);
   double baseline = 0.0;
   if (o.stereo)
   {
-    const auto offset_right = projectionOffset(calibration.at(right_key));
+    const auto offset_right = openable::kittiProjectionOffset(calibration.at(right_key));
     baseline = offset_left[0] - offset_right[0];
     if (!(baseline > 0.0))
       throw std::runtime_error("calib.txt: " + right_key + " is not to the right of " + left_key + " (baseline " +
@@ -571,11 +362,11 @@ int run(const Options& o, bool& bag_opened)
                                std::to_string(left.rows) + ", " + size_source + " is " + std::to_string(size.width) +
                                "x" + std::to_string(size.height) + " (one sequence has one camera size)");
     auto left_msg = toImage(left, left_frame);
-    left_msg.header.stamp = stamp;
-    left_msg.header.seq = static_cast<uint32_t>(k);
+    left_msg->header.stamp = stamp;
+    left_msg->header.seq = static_cast<uint32_t>(k);
     auto left_info = cameraInfo(p_left, 0.0, size, left_frame);
-    left_info.header = left_msg.header;
-    bag.write("/kitti/left/image_rect", stamp, left_msg);
+    left_info.header = left_msg->header;
+    bag.write("/kitti/left/image_rect", stamp, *left_msg);
     bag.write("/kitti/left/camera_info", stamp, left_info);
 
     if (o.stereo)
@@ -589,11 +380,11 @@ int run(const Options& o, bool& bag_opened)
                                  std::to_string(right.rows) + ", " + size_source + " is " + std::to_string(size.width) +
                                  "x" + std::to_string(size.height));
       auto right_msg = toImage(right, right_frame);
-      right_msg.header.stamp = stamp;
-      right_msg.header.seq = static_cast<uint32_t>(k);
+      right_msg->header.stamp = stamp;
+      right_msg->header.seq = static_cast<uint32_t>(k);
       auto right_info = cameraInfo(calibration.at(right_key), -baseline, size, right_frame);
-      right_info.header = right_msg.header;
-      bag.write("/kitti/right/image_rect", stamp, right_msg);
+      right_info.header = right_msg->header;
+      bag.write("/kitti/right/image_rect", stamp, *right_msg);
       bag.write("/kitti/right/camera_info", stamp, right_info);
       if (k == first)
       {
@@ -619,25 +410,22 @@ int run(const Options& o, bool& bag_opened)
 
     if (!poses.empty())
     {
-      Rigid cam0start_T_cam0;
-      for (int i = 0; i < 3; ++i)
-      {
-        for (int j = 0; j < 3; ++j)
-          cam0start_T_cam0.r[3 * i + j] = poses[k][4 * i + j];
-        cam0start_T_cam0.t[i] = poses[k][4 * i + 3];
-      }
-      const Rigid odom_T_left = odom_T_cam0start * cam0start_T_cam0 * cam0_T_left;
+      const Eigen::Isometry3d odom_T_left = odom_T_cam0start * toIsometry(poses[k]) * cam0_T_left;
+      const Eigen::Quaterniond rotation(odom_T_left.rotation());
       geometry_msgs::TransformStamped t;
       t.header.stamp = stamp;
       t.header.frame_id = "odom";
       t.child_frame_id = left_frame;
-      t.transform.translation.x = odom_T_left.t[0];
-      t.transform.translation.y = odom_T_left.t[1];
-      t.transform.translation.z = odom_T_left.t[2];
-      t.transform.rotation = toQuaternion(odom_T_left.r);
+      t.transform.translation.x = odom_T_left.translation().x();
+      t.transform.translation.y = odom_T_left.translation().y();
+      t.transform.translation.z = odom_T_left.translation().z();
+      t.transform.rotation.x = rotation.x();
+      t.transform.rotation.y = rotation.y();
+      t.transform.rotation.z = rotation.z();
+      t.transform.rotation.w = rotation.w();
       // Checked poses give finite transforms unless their numbers are near the double range.
       const auto& q = t.transform.rotation;
-      if (!std::isfinite(odom_T_left.t[0] + odom_T_left.t[1] + odom_T_left.t[2] + q.x + q.y + q.z + q.w))
+      if (!std::isfinite(odom_T_left.translation().sum() + q.x + q.y + q.z + q.w))
         throw std::runtime_error(o.poses + ":" + std::to_string(pose_lines[k]) + ": the pose of frame " +
                                  std::to_string(k) + " gives a non-finite transform (numbers too large?)");
       tf2_msgs::TFMessage tf;

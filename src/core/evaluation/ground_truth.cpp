@@ -16,6 +16,7 @@
 
 #include "openable/error.h"
 #include "evaluation_text.h"
+#include "openable/kitti.h"
 
 namespace openable
 {
@@ -193,35 +194,9 @@ GroundTruth loadPairsGroundTruth(const std::string& path, int pair_tolerance)
 
 std::vector<cv::Vec3d> loadKittiPositions(const std::string& path)
 {
-  std::ifstream in = openText(path, "KITTI poses");
   std::vector<cv::Vec3d> positions;
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number)
-  {
-    if (isCommentOrBlank(line))
-    {
-      continue;
-    }
-    std::istringstream fields(line);
-    double m[12];
-    std::string rest;
-    int read = 0;
-    while (read < 12 && fields >> m[read])
-    {
-      ++read;
-    }
-    if (read != 12 || (fields >> rest))
-    {
-      throw Error("KITTI poses: '" + path + "' line " + std::to_string(number) +
-                  " is not a row-major 3x4 pose (12 numbers)");
-    }
-    // Row-major [R|t]: the translation is the 4th, 8th and 12th number.
-    positions.emplace_back(m[3], m[7], m[11]);
-  }
-  if (positions.empty())
-  {
-    throw Error("KITTI poses: '" + path + "' holds no pose");
-  }
+  for (const KittiMatrix& m : readKittiPoses(path).poses)
+    positions.emplace_back(m[3], m[7], m[11]);  // row-major [R|t]: the 4th, 8th and 12th number
   return positions;
 }
 
