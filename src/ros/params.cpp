@@ -11,7 +11,7 @@ namespace openable_ros
 {
 namespace
 {
-std::string describe(XmlRpc::XmlRpcValue& value)
+std::string valueText(XmlRpc::XmlRpcValue& value)
 {
   switch (value.getType())
   {
@@ -97,7 +97,7 @@ bool toText(XmlRpc::XmlRpcValue& value, const std::string& type, std::string& te
         problem = "is not a finite number";
         return false;
       }
-      text = describe(value);
+      text = valueText(value);
       return true;
     }
   }
@@ -135,7 +135,7 @@ openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openabl
     std::string problem;
     if (!toText(value, key.type, text, problem))
     {
-      warnings.push_back("~" + key.name + ": value '" + describe(value) + "' " + problem + "; using the default " +
+      warnings.push_back("~" + key.name + ": value '" + valueText(value) + "' " + problem + "; using the default " +
                          defaults.get(key.name));
       continue;
     }
@@ -211,7 +211,7 @@ double readDouble(const ros::NodeHandle& private_nh, const std::string& name, do
   std::string problem;
   if (!toText(value, "double", text, problem))
   {
-    warnings.push_back("~" + name + ": value '" + describe(value) + "' " + problem + "; using " +
+    warnings.push_back("~" + name + ": value '" + valueText(value) + "' " + problem + "; using " +
                        std::to_string(fallback) + " " + units);
     return fallback;
   }
@@ -239,7 +239,7 @@ int readInt(const ros::NodeHandle& private_nh, const std::string& name, int fall
   std::string problem;
   if (!toText(value, "int", text, problem))
   {
-    warnings.push_back("~" + name + ": value '" + describe(value) + "' " + problem + "; using " +
+    warnings.push_back("~" + name + ": value '" + valueText(value) + "' " + problem + "; using " +
                        std::to_string(fallback));
     return fallback;
   }
@@ -265,7 +265,7 @@ bool readBool(const ros::NodeHandle& private_nh, const std::string& name, bool f
   std::string problem;
   if (!toText(value, "bool", text, problem))
   {
-    warnings.push_back("~" + name + ": value '" + describe(value) + "' " + problem + "; using " +
+    warnings.push_back("~" + name + ": value '" + valueText(value) + "' " + problem + "; using " +
                        (fallback ? "true" : "false"));
     return fallback;
   }
@@ -282,7 +282,7 @@ std::string readString(const ros::NodeHandle& private_nh, const std::string& nam
   }
   if (value.getType() != XmlRpc::XmlRpcValue::TypeString)
   {
-    warnings.push_back("~" + name + ": value '" + describe(value) + "' is " + typeName(value.getType()) +
+    warnings.push_back("~" + name + ": value '" + valueText(value) + "' is " + typeName(value.getType()) +
                        ", expected a string; using '" + fallback + "'");
     return fallback;
   }
@@ -300,7 +300,7 @@ std::vector<std::string> readStringList(const ros::NodeHandle& private_nh, const
   }
   if (value.getType() != XmlRpc::XmlRpcValue::TypeArray)
   {
-    warnings.push_back("~" + name + ": value '" + describe(value) + "' is " + typeName(value.getType()) +
+    warnings.push_back("~" + name + ": value '" + valueText(value) + "' is " + typeName(value.getType()) +
                        ", expected a list of strings; using an empty list");
     return out;
   }
