@@ -308,7 +308,7 @@ std::vector<std::string> readStringList(const ros::NodeHandle& private_nh, const
   {
     if (value[i].getType() != XmlRpc::XmlRpcValue::TypeString)
     {
-      warnings.push_back("~" + name + "[" + std::to_string(i) + "]: value '" + describe(value[i]) + "' is " +
+      warnings.push_back("~" + name + "[" + std::to_string(i) + "]: value '" + valueText(value[i]) + "' is " +
                          typeName(value[i].getType()) + ", expected a string; using an empty list");
       return {};
     }
