@@ -19,6 +19,11 @@ struct PinholeCamera
   double cx = 0.0;
   double cy = 0.0;
   double baseline = 0.0;  ///< metres; 0 = mono
+  /// The image size the intrinsics belong to (camera_info width x height); empty = whatever comes. A frame
+  /// of another size with the same aspect ratio (a resized copy: one traversal recorded at a lower
+  /// resolution) is resized to it before extraction, so one K holds for every frame; another aspect
+  /// ratio is refused.
+  cv::Size image_size;
 
   bool valid() const
   {

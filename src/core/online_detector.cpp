@@ -226,7 +226,7 @@ bool OnlineDetector::setCamera(const PinholeCamera& camera)
   {
     const PinholeCamera& c = verifier_->camera();
     return c.fx == camera.fx && c.fy == camera.fy && c.cx == camera.cx && c.cy == camera.cy &&
-           c.baseline == camera.baseline;
+           c.baseline == camera.baseline && c.image_size == camera.image_size;
   }
   verifier_ = std::make_unique<GeometricVerifier>(camera, options_.verifier);
   return true;
