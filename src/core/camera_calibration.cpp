@@ -23,6 +23,13 @@ constexpr size_t kMaxCalibrationBytes = 1u << 20;
   throw Error(name + ": " + key + ": " + what);
 }
 
+std::string str(double value)
+{
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
 std::string firstLine(const std::string& text)
 {
   const auto end = text.find('\n');
@@ -101,9 +108,9 @@ void checkIntrinsics(const PinholeCamera& camera, const std::string& name, const
 {
   if (!(camera.fx > 0.0) || !(camera.fy > 0.0))
     fail(name, key,
-         "fx " + std::to_string(camera.fx) + ", fy " + std::to_string(camera.fy) + ", expected > 0 (uncalibrated?)");
+         "fx " + str(camera.fx) + ", fy " + str(camera.fy) + ", expected > 0 (uncalibrated?)");
   if (camera.baseline < 0.0)
-    fail(name, key, "stereo baseline " + std::to_string(camera.baseline) + " m, expected >= 0");
+    fail(name, key, "stereo baseline " + str(camera.baseline) + " m, expected >= 0");
 }
 
 PinholeCamera parseRosYaml(const std::string& text, const std::string& name)
@@ -197,7 +204,7 @@ PinholeCamera parseKitti(const std::string& text, const std::string& name)
   PinholeCamera camera = PinholeCamera::fromProjection(p[0], has[1] ? p[1] : cv::Matx34d::zeros());
   checkIntrinsics(camera, name, has[1] ? "P1" : "P0");
   if (has[1] && !camera.stereo())
-    fail(name, "P1", "gives no baseline (P1(0,3) = " + std::to_string(p[1](0, 3)) + "); expected -fx * baseline < 0");
+    fail(name, "P1", "gives no baseline (P1(0,3) = " + str(p[1](0, 3)) + "); expected -fx * baseline < 0");
   return camera;
 }
 }  // namespace

@@ -2,6 +2,7 @@
 //
 //   openable_offline --config FILE.yaml --reference PATH [--query PATH] --output DIR [--set key=value]...
 //                    [--reference-right PATH] [--query-right PATH] [--ground-truth-tolerance T]
+//                    [--camera-info FILE [--verify-optional]]
 //
 // With --reference only, the stream is matched against its own past (loop-closure mode); with --query,
 // every query frame is matched against the reference traversal (localisation mode). See --help.
@@ -20,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "openable/camera_calibration.h"
 #include "openable/config.h"
 #include "openable/error.h"
 #include "openable/image_source.h"
@@ -38,6 +40,7 @@ const char* kUsage =
     "usage: openable_offline --config FILE.yaml --reference PATH [--query PATH] --output DIR\n"
     "                        [--set key=value]... [--reference-right PATH] [--query-right PATH]\n"
     "                        [--ground-truth-tolerance T] [--quiet]\n"
+    "                        [--camera-info FILE [--verify-optional]]\n"
     "\n"
     "PATH is a folder of images (in name order, numbers compared as numbers: image2 before image10) or a\n"
     "video file.\n"
@@ -48,6 +51,13 @@ const char* kUsage =
     "  --*-right        : right images of a rectified stereo pair (camera_type stereo)\n"
     "  --ground-truth-tolerance T : the traversals are frame-aligned; report the fraction of frames\n"
     "                     whose best match is within T frames of the same index\n"
+    "  --camera-info FILE : geometric verification of every loop closure, as a nodelet with ~verify: FILE is\n"
+    "                     a ROS camera_info YAML (camera_calibration's; projection_matrix used, so the images\n"
+    "                     must be rectified) or a KITTI calib.txt (P0, and P1 for a stereo baseline: with\n"
+    "                     camera_type stereo the right images give metric poses). A loop that fails is\n"
+    "                     failed_verification, one that cannot be verified unverified: neither is published.\n"
+    "                     Loop-closure mode only (a reference map keeps no features to verify against).\n"
+    "  --verify-optional  : publish loops that fail or cannot be verified anyway (~verify_required false)\n"
     "Writes into DIR: distance_matrix.npy, distance_matrix.png, distance_matrix_thresholded.png (with a\n"
     "threshold), loop_closures.csv (published loop closures), decisions.csv (every frame), timings.json.\n";
 
@@ -58,6 +68,8 @@ struct Options
   std::vector<std::string> sets;
   int ground_truth_tolerance = -1;
   bool quiet = false;
+  std::string camera_info;  // non-empty: verify, as a nodelet with ~verify and this camera_info
+  bool verify_optional = false;
 };
 
 Options parseArguments(int argc, char** argv)
@@ -69,6 +81,11 @@ Options parseArguments(int argc, char** argv)
     if (arg == "--quiet")
     {
       o.quiet = true;
+      continue;
+    }
+    if (arg == "--verify-optional")
+    {
+      o.verify_optional = true;
       continue;
     }
     if (arg == "--help" || arg == "-h")
@@ -93,6 +110,8 @@ Options parseArguments(int argc, char** argv)
       o.output = value;
     else if (arg == "--set")
       o.sets.push_back(value);
+    else if (arg == "--camera-info")
+      o.camera_info = value;
     else if (arg == "--ground-truth-tolerance")
     {
       size_t used = 0;
@@ -113,6 +132,12 @@ Options parseArguments(int argc, char** argv)
   }
   if (o.config_path.empty() || o.reference.empty() || o.output.empty())
     throw Error("--config, --reference and --output are required (see --help)");
+  if (o.verify_optional && o.camera_info.empty())
+    throw Error("--verify-optional needs --camera-info (there is nothing to verify without a camera)");
+  if (!o.camera_info.empty() && !o.query.empty())
+    throw Error(
+        "--camera-info verifies loop closures within one stream; with --query the reference map keeps no features "
+        "to verify against (drop --query or --camera-info)");
   return o;
 }
 
@@ -287,6 +312,20 @@ int run(const Options& options)
   const bool localisation = !options.query.empty();
   Timings timings;
 
+  // Verification as a nodelet with ~verify whose camera_info arrived before the first image.
+  openable::OnlineOptions online;
+  openable::PinholeCamera camera;
+  if (!options.camera_info.empty())
+  {
+    camera = openable::readCameraCalibration(options.camera_info);
+    online.verify = true;
+    online.verify_required = !options.verify_optional;
+    const bool stereo = camera.stereo() && config.camera_type == "stereo";
+    if (!options.quiet)
+      std::cerr << "verifying loop closures (" << (stereo ? "stereo" : "mono") << ", "
+                << (online.verify_required ? "required" : "optional") << ") with " << options.camera_info << "\n";
+  }
+
   // Localisation: describe the reference traversal into a map first.
   std::unique_ptr<openable::OnlineDetector> detector;
   std::vector<long> reference_file_of;  // database position -> file index of the reference
@@ -319,7 +358,9 @@ int run(const Options& options)
     detector = std::make_unique<openable::OnlineDetector>(config, std::move(map));
   }
   else
-    detector = std::make_unique<openable::OnlineDetector>(config);
+    detector = std::make_unique<openable::OnlineDetector>(config, online);
+  if (online.verify)
+    detector->setCamera(camera);
 
   // The stream: every frame through the online pipeline, as a nodelet would see it.
   TraversalReader stream(localisation ? options.query : options.reference,
