@@ -2,10 +2,13 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 #include "openable/npy.h"
 #include "test_util.h"
@@ -133,4 +136,112 @@ TEST(OfflineTool, UnreadableImageInFolderIsReportedAndSkipped)
   for (int j = 0; j < 4; ++j)
     EXPECT_TRUE(std::isnan(m.at<float>(2, j)));  // the unreadable frame keeps its (empty) row
   EXPECT_FALSE(std::isnan(m.at<float>(3, 0)));
+}
+
+namespace
+{
+std::string readFile(const std::string& path)
+{
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// query,match,... rows of a CSV keyed by their first two fields, with the status (5th field).
+std::map<std::string, std::string> statusByPair(const std::string& csv)
+{
+  std::map<std::string, std::string> out;
+  std::istringstream lines(csv);
+  std::string line;
+  std::getline(lines, line);  // header
+  while (std::getline(lines, line))
+  {
+    std::vector<std::string> fields;
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');)
+      fields.push_back(cell);
+    if (fields.size() >= 5)
+      out[fields[0] + "," + fields[1]] = fields[4];
+  }
+  return out;
+}
+}  // namespace
+
+// --camera-info: the same stream without verification, with it required and with it optional. Required
+// publishes a subset, and every loop it drops is in decisions.csv as failed_verification; optional publishes
+// exactly the unverified set (flagged in the nodelet's message, not in the CSV). Stream: Gardens Point
+// day_left 100..199 then day_right 100..199 (the same places from the other side of the path), the
+// assumed Gardens Point camera of test/data/calibration.
+TEST(OfflineTool, CameraInfoVerifiesLoopClosuresAsANodeletWould)
+{
+  const std::string in = freshDir("verify_in");
+  fs::create_directories(in);
+  int n = 0;
+  for (const std::string traversal : {"day_left", "day_right"})
+    for (int i = 100; i < 200; ++i)
+    {
+      char image[32], frame[32];
+      std::snprintf(image, sizeof(image), "/Image%03d.jpg", i);
+      std::snprintf(frame, sizeof(frame), "/frame%04d.jpg", n++);
+      fs::create_symlink(openable_test::sharedData("gardens_point/" + traversal + image), in + frame);
+    }
+  const std::string base =
+      "--config " + std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml --quiet --reference " + in + " --output ";
+  const std::string camera =
+      " --camera-info " + std::string(OPENABLE_SOURCE_DIR) + "/test/data/calibration/gardens_point_assumed.yaml";
+  const std::string plain = freshDir("verify_plain"), required = freshDir("verify_required"),
+                    optional = freshDir("verify_optional");
+  ASSERT_EQ(run(base + plain).exit_code, 0);
+  const Result r = run(base + required + camera);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_EQ(run(base + optional + camera + " --verify-optional").exit_code, 0);
+
+  const auto unverified = statusByPair(readFile(plain + "/loop_closures.csv"));
+  const auto verified = statusByPair(readFile(required + "/loop_closures.csv"));
+  const auto decisions = statusByPair(readFile(required + "/decisions.csv"));
+  EXPECT_EQ(readFile(optional + "/loop_closures.csv"), readFile(plain + "/loop_closures.csv"));
+  EXPECT_EQ(readFile(required + "/loop_closures.csv").rfind("query,match,distance,score,status\n", 0), 0u);
+  ASSERT_GT(unverified.size(), 10u);
+  int failed = 0;
+  for (const auto& [pair, status] : unverified)
+  {
+    ASSERT_TRUE(decisions.count(pair)) << pair;
+    if (verified.count(pair))
+      continue;
+    EXPECT_EQ(decisions.at(pair), "failed_verification") << pair;
+    ++failed;
+  }
+  for (const auto& [pair, status] : verified)
+    EXPECT_TRUE(unverified.count(pair)) << pair << " published only with verification";
+  // Day/day from the other side of the path: about half verify (doc/results.md).
+  EXPECT_GT(verified.size(), 0u);
+  EXPECT_GT(failed, 0);
+  EXPECT_NE(r.output.find("failed_verification"), std::string::npos) << r.output;
+}
+
+TEST(OfflineTool, CameraInfoErrorsNameTheFileAndKey)
+{
+  const std::string out = freshDir("verify_bad");
+  const std::string args = "--config " + config() + " --reference " +
+                           openable_test::sharedData("gardens_point/day_right") + " --output " + out;
+  const std::string bad = freshDir("bad_calibration.yaml");
+  std::ofstream(bad) << "image_width: 640\nimage_height: 480\nprojection_matrix: {rows: 3, cols: 4, data: [1, 2]}\n";
+  struct Case
+  {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {args + " --camera-info " + bad, bad + ": projection_matrix.data: 2 numbers, expected 12"},
+      {args + " --camera-info /nonexistent/calib.txt", "/nonexistent/calib.txt: cannot be read"},
+      {args + " --verify-optional", "--verify-optional needs --camera-info"},
+      {args + " --query " + openable_test::sharedData("gardens_point/day_left") + " --camera-info " + bad,
+       "--camera-info verifies loop closures within one stream"},
+  };
+  for (const auto& c : cases)
+  {
+    const Result r = run(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(out + "/loop_closures.csv"));
 }
