@@ -55,9 +55,11 @@ const char* kUsage =
     "                     a ROS camera_info YAML (camera_calibration's; projection_matrix used, so the images\n"
     "                     must be rectified) or a KITTI calib.txt (P0, and P1 for a stereo baseline: with\n"
     "                     camera_type stereo the right images give metric poses). A loop that fails is\n"
-    "                     failed_verification, one that cannot be verified unverified: neither is published.\n"
+    "                     failed_verification, one that cannot be verified unverified: by default neither\n"
+    "                     is published.\n"
     "                     Loop-closure mode only (a reference map keeps no features to verify against).\n"
-    "  --verify-optional  : publish loops that fail or cannot be verified anyway (~verify_required false)\n"
+    "  --verify-optional  : publish loops that cannot be verified (no features) without a pose instead of\n"
+    "                     dropping them (~verify_required false); a loop that fails is never published\n"
     "Writes into DIR: distance_matrix.npy, distance_matrix.png, distance_matrix_thresholded.png (with a\n"
     "threshold), loop_closures.csv (published loop closures), decisions.csv (every frame), timings.json.\n";
 
