@@ -208,6 +208,31 @@ TEST_F(EurocRevisits, MonoPureRotationRejected)
   EXPECT_GT(v.inliers, 100);  // plenty of support: it is the geometry, not the matching, that is rejected
 }
 
+// A camera with a calibrated size takes a frame that is a resized copy (one traversal recorded at a lower
+// resolution) at that size, so one K holds; another aspect ratio is refused rather than verified wrongly.
+TEST_F(EurocRevisits, FramesOfAnotherSizeAreScaledToTheCalibratedSize)
+{
+  openable::PinholeCamera camera = monoOf(camera_);
+  camera.image_size = left_rect_[0].size();
+  openable::GeometricVerifier verifier(camera);
+  cv::Mat half;
+  cv::resize(left_rect_[0], half, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+  const auto query = verifier.extract(half, cv::Mat(), 0);
+  EXPECT_EQ(query.image_size, camera.image_size);
+  const auto v = verifier.verify(verifier.extract(left_rect_[1], cv::Mat(), 1), query);
+  ASSERT_TRUE(v.accepted()) << v.reason;
+  EXPECT_LT(compare(v, truth(1, 0)).rotation_deg, 4.0);
+  try
+  {
+    verifier.extract(left_rect_[0](cv::Rect(0, 0, 752, 400)));
+    FAIL() << "a 752x400 frame accepted for a 752x480 calibration";
+  }
+  catch (const openable::Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("not a resized copy"), std::string::npos) << e.what();
+  }
+}
+
 TEST(GeometricVerifier, BadInputThrowsOrRejects)
 {
   openable::PinholeCamera uncalibrated;
