@@ -51,15 +51,11 @@ const char* kUsage =
     "  --*-right        : right images of a rectified stereo pair (camera_type stereo)\n"
     "  --ground-truth-tolerance T : the traversals are frame-aligned; report the fraction of frames\n"
     "                     whose best match is within T frames of the same index\n"
-    "  --camera-info FILE : geometric verification of every loop closure, as a nodelet with ~verify: FILE is\n"
-    "                     a ROS camera_info YAML (camera_calibration's; projection_matrix used, so the images\n"
-    "                     must be rectified) or a KITTI calib.txt (P0, and P1 for a stereo baseline: with\n"
-    "                     camera_type stereo the right images give metric poses). A loop that fails is\n"
-    "                     failed_verification, one that cannot be verified unverified: by default neither\n"
-    "                     is published.\n"
-    "                     Loop-closure mode only (a reference map keeps no features to verify against).\n"
-    "  --verify-optional  : publish loops that cannot be verified (no features) without a pose instead of\n"
-    "                     dropping them (~verify_required false); a loop that fails is never published\n"
+    "  --camera-info FILE : verify every loop closure geometrically, as a nodelet with ~verify: FILE is a ROS\n"
+    "                     camera_info YAML (projection_matrix: rectified images) or a KITTI calib.txt (P1: a\n"
+    "                     stereo baseline). Loops that fail are failed_verification, unverifiable ones\n"
+    "                     unverified; neither is published. Loop-closure mode only (a map keeps no features).\n"
+    "  --verify-optional  : unverifiable loops go out without a pose (~verify_required false)\n"
     "Writes into DIR: distance_matrix.npy, distance_matrix.png, distance_matrix_thresholded.png (with a\n"
     "threshold), loop_closures.csv (published loop closures), decisions.csv (every frame), timings.json.\n";
 
@@ -322,10 +318,10 @@ int run(const Options& options)
     camera = openable::readCameraCalibration(options.camera_info);
     online.verify = true;
     online.verify_required = !options.verify_optional;
-    const bool stereo = camera.stereo() && config.camera_type == "stereo";
     if (!options.quiet)
-      std::cerr << "verifying loop closures (" << (stereo ? "stereo" : "mono") << ", "
-                << (online.verify_required ? "required" : "optional") << ") with " << options.camera_info << "\n";
+      std::cerr << "verifying loop closures with " << options.camera_info << " ("
+                << (camera.stereo() && config.camera_type == "stereo" ? "stereo" : "mono")
+                << (online.verify_required ? ", required)\n" : ", optional)\n");
   }
 
   // Localisation: describe the reference traversal into a map first.
