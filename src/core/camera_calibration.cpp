@@ -2,14 +2,18 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include "openable/error.h"
+#include "openable/kitti.h"
 
 namespace openable
 {
@@ -107,8 +111,7 @@ int yamlSize(const YAML::Node& root, const std::string& name, const char* key)
 void checkIntrinsics(const PinholeCamera& camera, const std::string& name, const std::string& key)
 {
   if (!(camera.fx > 0.0) || !(camera.fy > 0.0))
-    fail(name, key,
-         "fx " + str(camera.fx) + ", fy " + str(camera.fy) + ", expected > 0 (uncalibrated?)");
+    fail(name, key, "fx " + str(camera.fx) + ", fy " + str(camera.fy) + ", expected > 0 (uncalibrated?)");
   if (camera.baseline < 0.0)
     fail(name, key, "stereo baseline " + str(camera.baseline) + " m, expected >= 0");
 }
@@ -169,51 +172,29 @@ PinholeCamera parseRosYaml(const std::string& text, const std::string& name)
   return camera;
 }
 
-PinholeCamera parseKitti(const std::string& text, const std::string& name)
+// KITTI's own reader checks the numbers; here only what the verifier needs: P0, and P1 giving a baseline.
+PinholeCamera fromKitti(const std::map<std::string, KittiMatrix>& matrices, const std::string& name)
 {
-  // "P0: 12 numbers"; other lines (P2, P3, Tr, ...) are not needed and not checked.
-  const std::regex line_pattern(R"(^\s*(P[01])\s*:(.*)$)");
-  std::istringstream lines(text);
-  std::string line;
-  bool has[2] = {false, false};
-  cv::Matx34d p[2] = {cv::Matx34d::zeros(), cv::Matx34d::zeros()};
-  while (std::getline(lines, line))
+  const auto matrix = [](const KittiMatrix& m)
   {
-    if (!line.empty() && line.back() == '\r')
-      line.pop_back();
-    std::smatch m;
-    if (!std::regex_match(line, m, line_pattern))
-      continue;
-    const std::string key = m[1].str();
-    const int which = key == "P0" ? 0 : 1;
-    if (has[which])
-      fail(name, key, "given twice");
-    std::istringstream fields(m[2].str());
-    std::vector<double> values;
-    std::string field;
-    while (fields >> field)
-      values.push_back(number(name, key, field));
-    if (values.size() != 12)
-      fail(name, key, std::to_string(values.size()) + " numbers, expected 12 (3x4 row-major projection)");
-    for (int i = 0; i < 12; ++i)
-      p[which].val[i] = values[i];
-    has[which] = true;
-  }
-  if (!has[0])
+    cv::Matx34d p;
+    std::copy(m.begin(), m.end(), p.val);
+    return p;
+  };
+  const auto p0 = matrices.find("P0");
+  if (p0 == matrices.end())
     fail(name, "P0", "missing; expected a line 'P0: 12 numbers' (the left camera)");
-  PinholeCamera camera = PinholeCamera::fromProjection(p[0], has[1] ? p[1] : cv::Matx34d::zeros());
-  checkIntrinsics(camera, name, has[1] ? "P1" : "P0");
-  if (has[1] && !camera.stereo())
-    fail(name, "P1", "gives no baseline (P1(0,3) = " + str(p[1](0, 3)) + "); expected -fx * baseline < 0");
+  const auto p1 = matrices.find("P1");
+  const PinholeCamera camera = PinholeCamera::fromProjection(
+      matrix(p0->second), p1 == matrices.end() ? cv::Matx34d::zeros() : matrix(p1->second));
+  if (p1 != matrices.end() && !camera.stereo())
+    fail(name, "P1", "gives no baseline (P1(0,3) = " + str(p1->second[3]) + "); expected -fx * baseline < 0");
   return camera;
 }
 }  // namespace
 
 PinholeCamera parseCameraCalibration(const std::string& text, const std::string& name)
 {
-  static const std::regex kitti(R"((^|\n)\s*P0\s*:)");
-  if (std::regex_search(text, kitti))
-    return parseKitti(text, name);
   return parseRosYaml(text, name);
 }
 
@@ -232,7 +213,10 @@ PinholeCamera readCameraCalibration(const std::string& path)
   text.resize(static_cast<size_t>(in.gcount()));
   if (text.size() > kMaxCalibrationBytes)
     throw Error(path + ": larger than " + std::to_string(kMaxCalibrationBytes) + " bytes; not a calibration file");
-  return parseCameraCalibration(text, path);
+  static const std::regex kitti(R"((^|\n)\s*P0\s*:)");
+  if (std::regex_search(text, kitti))
+    return fromKitti(readKittiCalibration(path), path);
+  return parseRosYaml(text, path);
 }
 
 }  // namespace openable

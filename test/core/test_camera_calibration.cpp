@@ -104,8 +104,8 @@ TEST(CameraCalibration, KittiCalibTxtIsStereoWithP1)
   EXPECT_DOUBLE_EQ(camera.cy, 183.1104);
   EXPECT_NEAR(camera.baseline, 0.53715, 1e-5);
   EXPECT_TRUE(camera.image_size.empty());
-  const auto mono =
-      openable::parseCameraCalibration("P0: 700 0 600 0 0 700 180 0 0 0 1 0\r\nTr: 1 2 3\r\n", "calib.txt");
+  const auto mono = openable::readCameraCalibration(
+      writeTemp("mono_calib.txt", "P0: 700 0 600 0 0 700 180 0 0 0 1 0\r\nTr: 1 2 3 4 5 6 7 8 9 10 11 12\r\n"));
   EXPECT_FALSE(mono.stereo());
   EXPECT_DOUBLE_EQ(mono.cy, 180.0);
 }
@@ -124,11 +124,31 @@ TEST(CameraCalibration, BadFilesSayWhichFileAndKey)
   errorOf("", "projection_matrix");
   errorOf("camera_matrix: {rows: 3, cols: 3, data: [500, 0, 320\n", "YAML");
   errorOf("camera_matrix: {data: 5}\n", "camera_matrix.data");
-  errorOf("P0: 700 0 600 0 0 700 180 0 0 0 1\n", "P0");
-  errorOf("P0: 700 0 600 0 0 700 180 0 0 0 1 x\n", "P0");
-  errorOf("P1: 700 0 600 -380 0 700 180 0 0 0 1 0\n", "P0");
-  errorOf("P0: 700 0 600 0 0 700 180 0 0 0 1 0\nP1: 700 0 600 0 0 700 180 0 0 0 1 0\n", "P1");
-  errorOf("P0: 0 0 600 0 0 700 180 0 0 0 1 0\n", "P0");
+  // KITTI files (read by readKittiCalibration, whose errors say "path:line: key ...").
+  const std::string p0 = "P0: 700 0 600 0 0 700 180 0 0 0 1 0\n";
+  const std::vector<std::pair<std::string, std::string>> kitti = {
+      {"P0: 700 0 600 0 0 700 180 0 0 0 1\n", "P0"},
+      {"P0: 700 0 600 0 0 700 180 0 0 0 1 x\n", "P0"},
+      {"P0: 0 0 600 0 0 700 180 0 0 0 1 0\n", "P0"},
+      {p0 + "P1: 700 0 600 0 0 700 180 0 0 0 1 0\n", "P1"},
+      {p0 + "P1: 700 0 600 -380 0 700 180 nan 0 0 1 0\n", "P1"},
+  };
+  for (const auto& [text, key] : kitti)
+  {
+    const std::string path = writeTemp("bad_calib.txt", text);
+    try
+    {
+      openable::readCameraCalibration(path);
+      ADD_FAILURE() << "accepted: " << text;
+    }
+    catch (const openable::Error& e)
+    {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(path, 0), 0u) << what;
+      EXPECT_NE(what.find(key), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
   for (const std::string& path :
        {std::string("/nonexistent/calib.txt"), std::filesystem::temp_directory_path().string()})
   {
