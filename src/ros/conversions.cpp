@@ -119,7 +119,9 @@ openable::PinholeCamera toPinholeCamera(const sensor_msgs::CameraInfo& left, con
       p_right(i / 4, i % 4) = right->P[size_t(i)];
     }
   }
-  return openable::PinholeCamera::fromProjection(p_left, p_right);
+  openable::PinholeCamera camera = openable::PinholeCamera::fromProjection(p_left, p_right);
+  camera.image_size = cv::Size(int(left.width), int(left.height));  // images of another size are scaled to it
+  return camera;
 }
 
 geometry_msgs::Pose toPoseMsg(const std::array<double, 7>& pose)
