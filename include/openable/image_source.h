@@ -53,8 +53,5 @@ private:
   std::unique_ptr<Video> video_;
 };
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename, so readers see the
-/// old file or the whole new one, never a partial one. Throws Error.
-void writeFileAtomically(const std::string& path, const std::string& bytes);
 
 }  // namespace openable

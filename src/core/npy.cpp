@@ -1,6 +1,7 @@
 // NumPy .npy reader and writer for the 2-D float matrices the toolbox exchanges with Python.
 // Format reference: numpy/lib/format.py (magic, version, little-endian header length, Python dict
 // literal padded so the data starts on a 64-byte boundary).
+#include "openable/atomic_file.h"
 #include "openable/npy.h"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+#include "openable/atomic_file.h"
 #include "openable/place_database.h"
 
 #include <algorithm>

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "openable/atomic_file.h"
 #include "openable/error.h"
 #include "openable/evaluation.h"
 #include "openable/ground_truth_sources.h"

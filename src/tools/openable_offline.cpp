@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "openable/atomic_file.h"
 #include "openable/camera_calibration.h"
 #include "openable/config.h"
 #include "openable/error.h"

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "openable/atomic_file.h"
 #include "openable/error.h"
 #include "openable/evaluation.h"
 #include "openable/image_source.h"

@@ -1,4 +1,5 @@
 // Query masks: which query frames are evaluated (near-black frames left out).
+#include "openable/atomic_file.h"
 #include "openable/evaluation.h"
 
 #include <algorithm>

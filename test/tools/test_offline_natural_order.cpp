@@ -12,7 +12,7 @@
 #include <string>
 
 #include "openable/npy.h"
-#include "test_util.h"
+#include "../core/test_util.h"
 
 #ifndef OPENABLE_OFFLINE_BINARY
 #error "OPENABLE_OFFLINE_BINARY (path of the openable_offline executable) must be defined by the build"

@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "openable/npy.h"
-#include "test_util.h"
+#include "../core/test_util.h"
 
 namespace fs = std::filesystem;
 

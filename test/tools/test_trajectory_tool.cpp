@@ -12,7 +12,7 @@
 
 #include "openable/evaluation.h"
 #include "openable/trajectory_plot.h"
-#include "test_util.h"
+#include "../core/test_util.h"
 
 #ifndef OPENABLE_TRAJECTORY_BINARY
 #error "OPENABLE_TRAJECTORY_BINARY (path of the openable_trajectory executable) must be defined by the build"
