@@ -18,9 +18,9 @@ namespace openable
 /// camera_type and descriptor (see OnlineDetector::describe).
 struct FrameInput
 {
-  cv::Mat image;                ///< mono image, left rectified image (stereo) or panorama
-  cv::Mat right;                ///< stereo: right rectified image (D-LDB computes the disparity with SGBM)
-  cv::Mat disparity;            ///< stereo: a disparity image instead of `right` (stereo_msgs: 32FC1, < 0 invalid)
+  cv::Mat image;                 ///< mono image, left rectified image (stereo) or panorama
+  cv::Mat right;                 ///< stereo: right rectified image (D-LDB computes the disparity with SGBM)
+  cv::Mat disparity;             ///< stereo: a disparity image instead of `right` (stereo_msgs: 32FC1, < 0 invalid)
   std::vector<cv::Mat> cameras;  ///< panoramic ring: one image per camera, in ring order (instead of `image`)
   double stamp = 0.0;            ///< seconds; 0 = unknown (no time checks, no exclusion_seconds)
   uint32_t session = 0;
@@ -53,13 +53,13 @@ struct StageTimes
 struct FrameOutcome
 {
   FrameStatus status = FrameStatus::TooEarly;
-  bool stored = false;       ///< added to the history (loop-closure mode) / matched (localisation)
-  FrameInfo query;           ///< the frame as stored (its id is set)
-  Detection detection;       ///< candidates, uniqueness, ...
-  float score = 0.0f;        ///< decision score, higher = surer (LoopDecision::score)
+  bool stored = false;  ///< added to the history (loop-closure mode) / matched (localisation)
+  FrameInfo query;      ///< the frame as stored (its id is set)
+  Detection detection;  ///< candidates, uniqueness, ...
+  float score = 0.0f;   ///< decision score, higher = surer (LoopDecision::score)
   bool has_match_info = false;
-  FrameInfo match;           ///< the best match's stored info, when it is still in the history
-  bool verified = false;     ///< `verification` holds an accepted relative pose
+  FrameInfo match;        ///< the best match's stored info, when it is still in the history
+  bool verified = false;  ///< `verification` holds an accepted relative pose
   Verification verification;
   std::string verification_note;  ///< why verification did not run or failed (empty when verified)
   StageTimes times;

@@ -13,10 +13,10 @@ namespace openable
 /// How odometry and loop closures become a pose graph (everything a backend does besides messages).
 struct PoseGraphBuilderOptions
 {
-  double keyframe_distance = 1.0;           ///< m travelled before a new keyframe
-  double keyframe_angle = 0.2;              ///< rad turned before a new keyframe
-  double odometry_sigma_translation = 0.02;  ///< fraction of the distance between keyframes (+ 1 cm)
-  double odometry_sigma_rotation = 0.002;    ///< rad per metre between keyframes (+ 0.002 rad)
+  double keyframe_distance = 1.0;               ///< m travelled before a new keyframe
+  double keyframe_angle = 0.2;                  ///< rad turned before a new keyframe
+  double odometry_sigma_translation = 0.02;     ///< fraction of the distance between keyframes (+ 1 cm)
+  double odometry_sigma_rotation = 0.002;       ///< rad per metre between keyframes (+ 0.002 rad)
   double default_loop_sigma_translation = 0.2;  ///< m, for a verified loop without usable covariance
   double default_loop_sigma_rotation = 0.05;    ///< rad, same
   double unverified_sigma_translation = 3.0;    ///< m, "same place" constraint of an unverified loop

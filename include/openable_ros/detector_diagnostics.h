@@ -22,7 +22,7 @@ struct FrameCounters
   uint64_t loops = 0;
   uint64_t matrix_published = 0;
   uint64_t dropped_by_synchroniser = 0;
-  std::map<std::string, uint64_t> rejected;  ///< by reason
+  std::map<std::string, uint64_t> rejected;      ///< by reason
   std::map<std::string, uint64_t> statuses;      ///< frames per decision status
   std::map<std::string, uint64_t> verification;  ///< verifier outcomes ("accepted", "identical images", ...)
   double describe_ms_last = 0.0, describe_ms_total = 0.0;

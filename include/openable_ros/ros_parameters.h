@@ -16,8 +16,8 @@ struct RosParameters
   // Inputs.
   int queue_size = 10;
   double sync_warning_timeout = 5.0;
-  bool approximate_sync = false;  ///< stereo, panoramic ring
-  bool use_disparity = false;     ///< stereo
+  bool approximate_sync = false;     ///< stereo, panoramic ring
+  bool use_disparity = false;        ///< stereo
   std::vector<std::string> cameras;  ///< panoramic ring
   double max_skew = 0.02;            ///< panoramic ring
   // Stream.
@@ -49,7 +49,7 @@ struct RosParameter
   std::string default_value;  ///< as written in YAML
   std::string range;          ///< "[min, max]", "a | b" or ""
   std::string units;
-  std::string nodelets;       ///< "all", "stereo", "panoramic", "stereo, panoramic"
+  std::string nodelets;  ///< "all", "stereo", "panoramic", "stereo, panoramic"
   std::string doc;
   /// Reads ~name into the struct; a bad value is explained in `warnings` and the default kept.
   std::function<void(const ros::NodeHandle&, RosParameters&, std::vector<std::string>&)> read;

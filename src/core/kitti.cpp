@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <climits>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -163,7 +163,7 @@ std::map<long, std::string> listKittiImages(const std::string& dir)
     {
       closedir(d);
       throw Error(dir + "/" + name + ": frame number " + stem + " is too large (expected at most " +
-                               std::to_string(UINT32_MAX) + ", KITTI names frames NNNNNN.png)");
+                  std::to_string(UINT32_MAX) + ", KITTI names frames NNNNNN.png)");
     }
     images[static_cast<long>(index)] = name;
   }

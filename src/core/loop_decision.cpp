@@ -77,7 +77,10 @@ bool LoopDecision::advancesWithRun(const Detection& detection) const
   // step and over the whole run, so a match that stays put (a "hub" place every frame matches) never
   // becomes consistent by small steps.
   const auto offset = [&detection](uint64_t from, long frames)
-  { return std::labs(static_cast<long>(detection.best.id) - static_cast<long>(from) - detection.best.direction * frames); };
+  {
+    return std::labs(static_cast<long>(detection.best.id) - static_cast<long>(from) -
+                     detection.best.direction * frames);
+  };
   return offset(previous_match_, 1) <= config_.consistency_tolerance &&
          offset(run_start_match_, run_) <= config_.consistency_tolerance;
 }

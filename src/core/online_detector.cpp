@@ -206,9 +206,10 @@ void OnlineDetector::verify(const FrameInput& input, FrameOutcome& outcome)
     {
       outcome.verification = verifier_->verify(*match, *query);
       outcome.verified = outcome.verification.accepted();
-      outcome.verification_note = outcome.verified ? "" : std::string(toString(outcome.verification.status)) +
-                                                              (outcome.verification.reason.empty() ? "" : " (" +
-                                                                   outcome.verification.reason + ")");
+      outcome.verification_note =
+          outcome.verified ? ""
+                           : std::string(toString(outcome.verification.status)) +
+                                 (outcome.verification.reason.empty() ? "" : " (" + outcome.verification.reason + ")");
       if (!outcome.verified)
         outcome.status = FrameStatus::FailedVerification;
     }

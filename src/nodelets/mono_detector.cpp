@@ -27,15 +27,15 @@ private:
       return;
     transport_ = std::make_unique<image_transport::ImageTransport>(getNodeHandle());
     // Transport hints from the private handle: ~image_transport:=compressed works.
-    image_sub_ = transport_->subscribe(
-        "image", uint32_t(parameters.queue_size), &MonoDetector::imageCallback, this,
-        image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
+    image_sub_ =
+        transport_->subscribe("image", uint32_t(parameters.queue_size), &MonoDetector::imageCallback, this,
+                              image_transport::TransportHints("raw", ros::TransportHints(), getPrivateNodeHandle()));
     if (parameters.verify)
     {
       // Geometric verification needs the intrinsics of the rectified image (P), beside the image.
-      info_sub_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>(
-          "camera_info", 1,
-          [this](const sensor_msgs::CameraInfoConstPtr& msg) { detector_->setCamera(toPinholeCamera(*msg)); });
+      info_sub_ = getNodeHandle().subscribe<sensor_msgs::CameraInfo>("camera_info", 1,
+                                                                     [this](const sensor_msgs::CameraInfoConstPtr& msg)
+                                                                     { detector_->setCamera(toPinholeCamera(*msg)); });
     }
   }
 

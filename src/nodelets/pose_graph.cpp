@@ -136,10 +136,12 @@ private:
     // Deep odometry queue: an optimisation may hold the callback thread for a fraction of a second.
     odom_sub_ = nh.subscribe("odom", 1000, &PoseGraph::odometryCallback, this);
     loop_sub_ = nh.subscribe("loop_closures", 100, &PoseGraph::loopCallback, this);
-    optimise_timer_ = nh.createWallTimer(ros::WallDuration(optimise_period_), [this](const ros::WallTimerEvent&) {
-      if (builder_.dirty())
-        optimise();
-    });
+    optimise_timer_ = nh.createWallTimer(ros::WallDuration(optimise_period_),
+                                         [this](const ros::WallTimerEvent&)
+                                         {
+                                           if (builder_.dirty())
+                                             optimise();
+                                         });
     NODELET_INFO("pose_graph: keyframes every %.2f m / %.2f rad of %s, loops from %s, %s loss, map frame '%s'",
                  options_.keyframe_distance, options_.keyframe_angle, odom_sub_.getTopic().c_str(),
                  loop_sub_.getTopic().c_str(), loss_name_.c_str(), map_frame_.c_str());
@@ -198,14 +200,16 @@ private:
     switch (builder_.addOdometry(msg->header.stamp.toSec(), toEigen(msg->pose.pose)))
     {
       case openable::PoseGraphBuilder::Odometry::Late:
-        NODELET_WARN_THROTTLE(5.0, "pose_graph: odometry out of order (stamp %.3f <= latest %.3f); kept in the "
-                                   "history, not used for keyframes",
+        NODELET_WARN_THROTTLE(5.0,
+                              "pose_graph: odometry out of order (stamp %.3f <= latest %.3f); kept in the "
+                              "history, not used for keyframes",
                               msg->header.stamp.toSec(), span.second);
         return;
       case openable::PoseGraphBuilder::Odometry::Restarted:
-        NODELET_WARN("pose_graph: odometry jumped back in time from %.3f to %.3f, before the first keyframe; "
-                     "clearing the graph",
-                     span.second, msg->header.stamp.toSec());
+        NODELET_WARN(
+            "pose_graph: odometry jumped back in time from %.3f to %.3f, before the first keyframe; "
+            "clearing the graph",
+            span.second, msg->header.stamp.toSec());
         pending_.clear();
         publishPath(msg->header.stamp);
         break;
@@ -226,8 +230,9 @@ private:
     if (!msg->has_relative_pose && !use_unverified_)
     {
       ++ignored_unverified_;
-      NODELET_INFO_THROTTLE(10.0, "pose_graph: %zu loop closure(s) without relative_pose ignored (turn on the "
-                                  "detector's ~verify, or set ~use_unverified to add them as position constraints)",
+      NODELET_INFO_THROTTLE(10.0,
+                            "pose_graph: %zu loop closure(s) without relative_pose ignored (turn on the "
+                            "detector's ~verify, or set ~use_unverified to add them as position constraints)",
                             ignored_unverified_);
       return;
     }
@@ -242,8 +247,9 @@ private:
       pending_.push_back(msg);
       if (pending_.size() > 100)
       {
-        NODELET_WARN_THROTTLE(5.0, "pose_graph: more than 100 loop closures wait for odometry; dropping the oldest "
-                                   "(is %s being published?)",
+        NODELET_WARN_THROTTLE(5.0,
+                              "pose_graph: more than 100 loop closures wait for odometry; dropping the oldest "
+                              "(is %s being published?)",
                               odom_sub_.getTopic().c_str());
         pending_.pop_front();
       }
@@ -279,8 +285,9 @@ private:
       }
       catch (const tf2::TransformException& e)
       {
-        NODELET_WARN_THROTTLE(5.0, "pose_graph: no tf from odometry child frame '%s' to camera frame '%s' (%s); loop "
-                                   "%u -> %u ignored",
+        NODELET_WARN_THROTTLE(5.0,
+                              "pose_graph: no tf from odometry child frame '%s' to camera frame '%s' (%s); loop "
+                              "%u -> %u ignored",
                               child_frame_.c_str(), msg.header.frame_id.c_str(), e.what(), msg.query_id, msg.match_id);
         return true;
       }
@@ -294,21 +301,24 @@ private:
       {
         ++unmatched_;
         const auto span = builder_.odometrySpan();
-        NODELET_WARN_THROTTLE(5.0, "pose_graph: loop %u -> %u (stamps %.3f, %.3f) matches no keyframe: odometry covers "
-                                   "%.3f .. %.3f (%zu keyframes); ignored (%zu so far). Loop stamps must be image "
-                                   "stamps within the odometry's time span",
+        NODELET_WARN_THROTTLE(5.0,
+                              "pose_graph: loop %u -> %u (stamps %.3f, %.3f) matches no keyframe: odometry covers "
+                              "%.3f .. %.3f (%zu keyframes); ignored (%zu so far). Loop stamps must be image "
+                              "stamps within the odometry's time span",
                               msg.query_id, msg.match_id, loop.query_stamp, loop.match_stamp, span.first, span.second,
                               builder_.keyframes(), unmatched_);
         return true;
       }
       case Loop::SameKeyframe:
-        NODELET_WARN_THROTTLE(5.0, "pose_graph: loop %u -> %u joins one keyframe to itself (stamps %.3f s apart); "
-                                   "ignored (raise the detector's exclusion window?)",
+        NODELET_WARN_THROTTLE(5.0,
+                              "pose_graph: loop %u -> %u joins one keyframe to itself (stamps %.3f s apart); "
+                              "ignored (raise the detector's exclusion window?)",
                               msg.query_id, msg.match_id, loop.query_stamp - loop.match_stamp);
         return true;
       case Loop::AddedWithDefaultCovariance:
-        NODELET_WARN_THROTTLE(10.0, "pose_graph: loop %u -> %u: unusable covariance; using ~default_loop_sigma_* "
-                                    "(%.2f m, %.3f rad)",
+        NODELET_WARN_THROTTLE(10.0,
+                              "pose_graph: loop %u -> %u: unusable covariance; using ~default_loop_sigma_* "
+                              "(%.2f m, %.3f rad)",
                               msg.query_id, msg.match_id, options_.default_loop_sigma_translation,
                               options_.default_loop_sigma_rotation);
         return true;

@@ -129,15 +129,16 @@ private:
     if (info->K[0] == 0.0)
     {
       detector_->reject("uncalibrated camera", "'" + topic +
-                                             "': camera_info has K[0] = 0 (uncalibrated); expected a "
-                                             "calibrated, rectified camera");
+                                                   "': camera_info has K[0] = 0 (uncalibrated); expected a "
+                                                   "calibrated, rectified camera");
       return false;
     }
     if (info->width != image.width || info->height != image.height)
     {
       detector_->reject("camera_info size mismatch", "'" + topic + "': image is " + std::to_string(image.width) + "x" +
-                                                   std::to_string(image.height) + " but its camera_info says " +
-                                                   std::to_string(info->width) + "x" + std::to_string(info->height));
+                                                         std::to_string(image.height) + " but its camera_info says " +
+                                                         std::to_string(info->width) + "x" +
+                                                         std::to_string(info->height));
       return false;
     }
     return true;
@@ -162,10 +163,10 @@ private:
     if (left.size() != right.size() || left.type() != right.type())
     {
       detector_->reject("left/right mismatch", "'" + left_sub_.getTopic() + "' is " + std::to_string(left.cols) + "x" +
-                                             std::to_string(left.rows) + " " + left_msg->encoding + " but '" +
-                                             right_sub_.getTopic() + "' is " + std::to_string(right.cols) + "x" +
-                                             std::to_string(right.rows) + " " + right_msg->encoding +
-                                             "; expected a rectified pair of one size and encoding");
+                                                   std::to_string(left.rows) + " " + left_msg->encoding + " but '" +
+                                                   right_sub_.getTopic() + "' is " + std::to_string(right.cols) + "x" +
+                                                   std::to_string(right.rows) + " " + right_msg->encoding +
+                                                   "; expected a rectified pair of one size and encoding");
       return;
     }
     if (!checkInfo(left_info_, *left_msg, left_sub_.getTopic()) ||
@@ -200,10 +201,11 @@ private:
     }
     if (raw.size() != left.size())
     {
-      detector_->reject("left/disparity mismatch", "'" + left_sub_.getTopic() + "' is " + std::to_string(left.cols) + "x" +
-                                                 std::to_string(left.rows) + " but '" + disparity_sub_.getTopic() +
-                                                 "' is " + std::to_string(raw.cols) + "x" + std::to_string(raw.rows) +
-                                                 "; expected the disparity of the left image");
+      detector_->reject("left/disparity mismatch", "'" + left_sub_.getTopic() + "' is " + std::to_string(left.cols) +
+                                                       "x" + std::to_string(left.rows) + " but '" +
+                                                       disparity_sub_.getTopic() + "' is " + std::to_string(raw.cols) +
+                                                       "x" + std::to_string(raw.rows) +
+                                                       "; expected the disparity of the left image");
       return;
     }
     if (!checkInfo(left_info_, *left_msg, left_sub_.getTopic()))

@@ -91,8 +91,10 @@ std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle p
   Detector* self = d.get();
   d->updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, name);
   d->updater_->setHardwareID(name);
-  d->updater_->add("loop closure detector", [self](diagnostic_updater::DiagnosticStatusWrapper& s) { self->diagnose(s); });
-  d->diagnostics_timer_ = nh.createTimer(ros::Duration(0.1), [self](const ros::TimerEvent&) { self->updater_->update(); });
+  d->updater_->add("loop closure detector",
+                   [self](diagnostic_updater::DiagnosticStatusWrapper& s) { self->diagnose(s); });
+  d->diagnostics_timer_ =
+      nh.createTimer(ros::Duration(0.1), [self](const ros::TimerEvent&) { self->updater_->update(); });
   // Last: the server calls applyLive() at once with the values in force.
   d->reconfigure_ = std::make_unique<LiveReconfigure>(pnh, *d, config, parameters);
   ROS_INFO_STREAM_NAMED(name, "openable " << config.camera_type << " detector ready: " << config.descriptor
@@ -241,12 +243,12 @@ void Detector::setCamera(const openable::PinholeCamera& camera)
   try
   {
     if (!detector_->setCamera(camera))
-      warnThrottled("camera changed", 60.0, "camera_info changed after the verifier was built; keeping the first calibration");
+      warnThrottled("camera changed", 60.0,
+                    "camera_info changed after the verifier was built; keeping the first calibration");
     else if (first)
-      ROS_INFO_STREAM_NAMED(name_, "geometric verification on: fx " << camera.fx << ", baseline " << camera.baseline
-                                                                     << " m ("
-                                                                     << (camera.stereo() ? "stereo PnP" : "mono essential")
-                                                                     << ")");
+      ROS_INFO_STREAM_NAMED(name_, "geometric verification on: fx "
+                                       << camera.fx << ", baseline " << camera.baseline << " m ("
+                                       << (camera.stereo() ? "stereo PnP" : "mono essential") << ")");
   }
   catch (const openable::Error& e)
   {
@@ -371,8 +373,8 @@ void Detector::applyLive(openable::Config& requested, RosParameters& display)
                                      << parameters_.matrix_mode);
     display.matrix_mode = parameters_.matrix_mode;
   }
-  const std::string error = matrix_->setOptions(display.matrix_rate, display.matrix_size, display.matrix_mode,
-                                                display.matrix_threshold_view);
+  const std::string error =
+      matrix_->setOptions(display.matrix_rate, display.matrix_size, display.matrix_mode, display.matrix_threshold_view);
   if (!error.empty())
     ROS_WARN_STREAM_NAMED(name_, error);
   parameters_.matrix_rate = display.matrix_rate;

@@ -39,7 +39,8 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
                     static_cast<unsigned long>(rejected_recently));
   else
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, localising ? "localising" : "running");
-  status.add("mode", localising ? "localisation (query stream vs loaded map)" : "loop closure (stream vs its own history)");
+  status.add("mode",
+             localising ? "localisation (query stream vs loaded map)" : "loop closure (stream vs its own history)");
   status.add("input rate (Hz)", rate);
   status.add("frames received", counters.received);
   status.add("frames stored", counters.stored);

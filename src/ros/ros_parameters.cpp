@@ -22,7 +22,13 @@ std::string text(double v)
 RosParameter number(const char* name, double RosParameters::*field, double value, double min, double max,
                     const char* units, const char* nodelets, const char* doc)
 {
-  return {name, "double", text(value), "[" + text(min) + ", " + text(max) + "]", units, nodelets, doc,
+  return {name,
+          "double",
+          text(value),
+          "[" + text(min) + ", " + text(max) + "]",
+          units,
+          nodelets,
+          doc,
           [=](const ros::NodeHandle& nh, RosParameters& p, std::vector<std::string>& w)
           { p.*field = readDouble(nh, name, value, min, max, units, w); }};
 }
@@ -30,15 +36,26 @@ RosParameter number(const char* name, double RosParameters::*field, double value
 RosParameter integer(const char* name, int RosParameters::*field, int value, int min, int max, const char* units,
                      const char* nodelets, const char* doc)
 {
-  return {name, "int", std::to_string(value), "[" + std::to_string(min) + ", " + std::to_string(max) + "]", units,
-          nodelets, doc,
+  return {name,
+          "int",
+          std::to_string(value),
+          "[" + std::to_string(min) + ", " + std::to_string(max) + "]",
+          units,
+          nodelets,
+          doc,
           [=](const ros::NodeHandle& nh, RosParameters& p, std::vector<std::string>& w)
           { p.*field = readInt(nh, name, value, min, max, w); }};
 }
 
 RosParameter flag(const char* name, bool RosParameters::*field, bool value, const char* nodelets, const char* doc)
 {
-  return {name, "bool", value ? "true" : "false", "", "", nodelets, doc,
+  return {name,
+          "bool",
+          value ? "true" : "false",
+          "",
+          "",
+          nodelets,
+          doc,
           [=](const ros::NodeHandle& nh, RosParameters& p, std::vector<std::string>& w)
           { p.*field = readBool(nh, name, value, w); }};
 }
@@ -46,7 +63,13 @@ RosParameter flag(const char* name, bool RosParameters::*field, bool value, cons
 RosParameter word(const char* name, std::string RosParameters::*field, const char* value, const char* choices,
                   const char* nodelets, const char* doc)
 {
-  return {name, "string", std::string("\"") + value + "\"", choices, "", nodelets, doc,
+  return {name,
+          "string",
+          std::string("\"") + value + "\"",
+          choices,
+          "",
+          nodelets,
+          doc,
           [=](const ros::NodeHandle& nh, RosParameters& p, std::vector<std::string>& w)
           {
             std::string v = readString(nh, name, value, w);

@@ -14,10 +14,10 @@
 // images of a sequence (times.txt lists all frames) is fine; an image without a stamp is an error.
 // ROS-free apart from the message types and rosbag; no master needed.
 
+#include <cv_bridge/cv_bridge.h>
 #include <dirent.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
-#include <cv_bridge/cv_bridge.h>
 #include <ros/time.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/CameraInfo.h>

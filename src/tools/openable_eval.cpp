@@ -26,9 +26,9 @@ namespace
 {
 namespace fs = std::filesystem;
 
+using openable_eval::kUsage;
 using openable_eval::Options;
 using openable_eval::UsageError;
-using openable_eval::kUsage;
 
 std::string matrixFile(const std::string& path)
 {

@@ -92,11 +92,8 @@ Ground-truth comparison:
 Exit status: 0 on success, 1 with a one-line reason on stderr for bad input, 2 for bad usage.
 )";
 
-
 namespace
 {
-
-
 
 int parseInt(const std::string& flag, const std::string& text)
 {

@@ -7,10 +7,11 @@
 // With --reference only, the stream is matched against its own past (loop-closure mode); with --query,
 // every query frame is matched against the reference traversal (localisation mode). See --help.
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <unistd.h>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -26,9 +27,9 @@
 #include "openable/config.h"
 #include "openable/error.h"
 #include "openable/image_source.h"
-#include "openable/online_detector.h"
 #include "openable/loop_decision.h"
 #include "openable/npy.h"
+#include "openable/online_detector.h"
 #include "openable/progress.h"
 #include "openable/render.h"
 
@@ -123,7 +124,8 @@ Options parseArguments(int argc, char** argv)
       {
       }
       if (used != value.size() || t < 0 || t > 1000000000)
-        throw Error("--ground-truth-tolerance: '" + value + "' is not allowed; expected frames, an integer in [0, 1e9]");
+        throw Error("--ground-truth-tolerance: '" + value +
+                    "' is not allowed; expected frames, an integer in [0, 1e9]");
       o.ground_truth_tolerance = static_cast<int>(t);
     }
     else
@@ -399,8 +401,8 @@ int run(const Options& options)
     const openable::Detection& d = outcome.detection;
     const long match = d.has_candidates ? file_of[d.best.position] : -1;
     decisions << file << "," << match << "," << formatFloat(d.has_candidates ? d.best.distance : NAN) << ","
-              << formatFloat(d.has_candidates ? outcome.score : NAN) << "," << openable::toString(outcome.status)
-              << "," << (outcome.published() ? 1 : 0) << "\n";
+              << formatFloat(d.has_candidates ? outcome.score : NAN) << "," << openable::toString(outcome.status) << ","
+              << (outcome.published() ? 1 : 0) << "\n";
     if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;

@@ -74,7 +74,7 @@ TEST(LoopDecision, PublishesOnlyAfterConsistentFramesAdvanceTogether)
   EXPECT_EQ(decision.decide(candidate(40, 0.3f)), FrameStatus::Inconsistent);
   EXPECT_EQ(decision.decide(candidate(41, 0.3f)), FrameStatus::Inconsistent);
   EXPECT_EQ(decision.decide(candidate(42, 0.3f)), FrameStatus::Published);
-  EXPECT_EQ(decision.decide(candidate(44, 0.3f)), FrameStatus::Published);  // one frame off: within tolerance 1
+  EXPECT_EQ(decision.decide(candidate(44, 0.3f)), FrameStatus::Published);     // one frame off: within tolerance 1
   EXPECT_EQ(decision.decide(candidate(90, 0.3f)), FrameStatus::Inconsistent);  // jumped: a new run starts
   EXPECT_EQ(decision.decide(candidate(91, 0.3f)), FrameStatus::Inconsistent);
   EXPECT_EQ(decision.decide(candidate(92, 0.01f)), FrameStatus::NotUnique);  // a failing frame ends the run
@@ -122,7 +122,8 @@ TEST(LoopDecision, EqualsANaiveReferenceOnRandomStreams)
     for (int t = 0; t < 200; ++t)
     {
       const int kind = std::uniform_int_distribution<int>(0, 9)(rng);
-      match = kind < 6 ? match + 1 : (kind < 8 ? match + std::uniform_int_distribution<int>(0, 4)(rng) : 300 - match % 50);
+      match =
+          kind < 6 ? match + 1 : (kind < 8 ? match + std::uniform_int_distribution<int>(0, 4)(rng) : 300 - match % 50);
       const float u = std::uniform_real_distribution<float>(0.0f, 0.3f)(rng);
       seen.push_back(candidate(match, u));
       // Naive: the run is the longest suffix of gate-passing frames where every step and the whole span

@@ -2,8 +2,8 @@
 // streams that must publish nothing, keyframes, time jumps, verification policy and map refusal.
 #include <gtest/gtest.h>
 
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <opencv2/imgcodecs.hpp>

@@ -1,9 +1,9 @@
 // The ROS-free helpers the nodelets use: throttling, the sync watchdog's decision, the camera-ring
 // synchroniser, "did you mean" names, and loading a reference map.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
-#include <unistd.h>
 
 #include "openable/config.h"
 #include "openable/error.h"

@@ -69,8 +69,8 @@ TEST(RosParameters, RosYamlListsEveryParameterWithItsDefault)
     const std::regex line("(^|\\n)(#\\s+)?" + p.name + ":\\s*([^#\\n]*?)\\s*(#|\\n)");
     std::smatch m;
     ASSERT_TRUE(std::regex_search(yaml, m, line)) << p.name << " is missing from config/ros.yaml";
-    EXPECT_TRUE(sameValue(m[3], p.default_value)) << p.name << ": ros.yaml says " << m[3] << ", the table "
-                                                  << p.default_value;
+    EXPECT_TRUE(sameValue(m[3], p.default_value))
+        << p.name << ": ros.yaml says " << m[3] << ", the table " << p.default_value;
   }
 }
 
@@ -88,8 +88,8 @@ TEST(RosParameters, DocTableHoldsEveryCommonParameterWithItsDefault)
     std::smatch m;
     ASSERT_TRUE(std::regex_search(doc, m, row)) << p.name << " has no row in doc/ros_api.md";
     EXPECT_EQ(m[1], p.type) << p.name;
-    EXPECT_TRUE(sameValue(m[2], p.default_value)) << p.name << ": doc says " << m[2] << ", the table "
-                                                  << p.default_value;
+    EXPECT_TRUE(sameValue(m[2], p.default_value))
+        << p.name << ": doc says " << m[2] << ", the table " << p.default_value;
   }
 }
 
@@ -110,9 +110,9 @@ TEST(Conversions, EveryEncodingIsConvertedOrRefusedWithAReason)
     int channels;
   };
   const std::vector<Case> cases = {
-      {enc::MONO8, 1, true, 1},  {enc::TYPE_8UC1, 1, true, 1}, {enc::BGR8, 3, true, 3},
-      {enc::RGB8, 3, true, 3},   {enc::TYPE_8UC3, 3, true, 3}, {enc::BGRA8, 4, true, 3},
-      {enc::RGBA8, 4, true, 3},  {enc::TYPE_8UC4, 4, true, 3}, {enc::MONO16, 2, true, 1},
+      {enc::MONO8, 1, true, 1},       {enc::TYPE_8UC1, 1, true, 1},   {enc::BGR8, 3, true, 3},
+      {enc::RGB8, 3, true, 3},        {enc::TYPE_8UC3, 3, true, 3},   {enc::BGRA8, 4, true, 3},
+      {enc::RGBA8, 4, true, 3},       {enc::TYPE_8UC4, 4, true, 3},   {enc::MONO16, 2, true, 1},
       {enc::TYPE_16UC1, 2, false, 0}, {enc::TYPE_32FC1, 4, false, 0}, {"yuv422", 2, false, 0},
   };
   for (const auto& c : cases)

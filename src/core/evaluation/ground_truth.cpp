@@ -1,7 +1,5 @@
 // Ground truth: which reference frames are true matches of each query (aligned traversals, pairs
 // files, KITTI poses), and how two ground truths agree.
-#include "openable/evaluation.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -14,8 +12,9 @@
 #include <sstream>
 #include <utility>
 
-#include "openable/error.h"
 #include "evaluation_text.h"
+#include "openable/error.h"
+#include "openable/evaluation.h"
 #include "openable/kitti.h"
 
 namespace openable

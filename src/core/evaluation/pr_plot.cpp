@@ -1,6 +1,4 @@
 // The precision-recall plot (PNG): axes, curves, legend.
-#include "openable/evaluation.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -13,8 +11,9 @@
 #include <sstream>
 #include <utility>
 
-#include "openable/error.h"
 #include "evaluation_text.h"
+#include "openable/error.h"
+#include "openable/evaluation.h"
 
 namespace openable
 {

@@ -1,6 +1,4 @@
 // Precision-recall of a distance matrix against a ground truth (the paper's Fig. 5), and its outputs.
-#include "openable/evaluation.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -13,8 +11,9 @@
 #include <sstream>
 #include <utility>
 
-#include "openable/error.h"
 #include "evaluation_text.h"
+#include "openable/error.h"
+#include "openable/evaluation.h"
 
 namespace openable
 {

@@ -1,7 +1,4 @@
 // Query masks: which query frames are evaluated (near-black frames left out).
-#include "openable/atomic_file.h"
-#include "openable/evaluation.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -14,9 +11,11 @@
 #include <sstream>
 #include <utility>
 
-#include "openable/error.h"
-#include "openable/image_source.h"
 #include "evaluation_text.h"
+#include "openable/atomic_file.h"
+#include "openable/error.h"
+#include "openable/evaluation.h"
+#include "openable/image_source.h"
 
 namespace openable
 {

@@ -6,10 +6,7 @@
 
 namespace openable
 {
-PoseGraphBuilder::PoseGraphBuilder(const PoseGraphBuilderOptions& options)
-  : options_(options), graph_(options.graph)
-{
-}
+PoseGraphBuilder::PoseGraphBuilder(const PoseGraphBuilderOptions& options) : options_(options), graph_(options.graph) {}
 
 Matrix6d PoseGraphBuilder::adjoint(const Eigen::Isometry3d& t)
 {
@@ -89,9 +86,9 @@ void PoseGraphBuilder::addKeyframe(double stamp, const Eigen::Isometry3d& odom_p
     const Eigen::Isometry3d delta = keyframes_.back().odom_pose.inverse() * odom_pose;
     const size_t node = graph_.addNode(graph_.pose(keyframes_.size() - 1) * delta);
     const double d = delta.translation().norm();
-    graph_.addOdometry(node - 1, node, delta,
-                       diagonal(options_.odometry_sigma_translation * d + 0.01,
-                                options_.odometry_sigma_rotation * d + 0.002));
+    graph_.addOdometry(
+        node - 1, node, delta,
+        diagonal(options_.odometry_sigma_translation * d + 0.01, options_.odometry_sigma_rotation * d + 0.002));
   }
   keyframes_.push_back(Keyframe{stamp, odom_pose});
 }
@@ -116,8 +113,8 @@ PoseGraphBuilder::Place PoseGraphBuilder::place(double stamp, Anchor& anchor) co
 
 bool PoseGraphBuilder::odometryAt(double stamp, Eigen::Isometry3d& pose) const
 {
-  auto it = std::lower_bound(history_.begin(), history_.end(), stamp,
-                             [](const Sample& s, double t) { return s.stamp < t; });
+  auto it =
+      std::lower_bound(history_.begin(), history_.end(), stamp, [](const Sample& s, double t) { return s.stamp < t; });
   if (it == history_.end())
     return false;
   if (it->stamp == stamp)
@@ -143,7 +140,8 @@ PoseGraphBuilder::Loop PoseGraphBuilder::addLoop(const LoopMeasurement& loop)
   if (pq == Place::NotYet || pm == Place::NotYet)
   {
     // Dropped when odometry has moved well past the stamp without covering it.
-    const bool passed = !history_.empty() && history_.back().stamp > loop.query_stamp + 5.0 * options_.max_interpolation_gap;
+    const bool passed =
+        !history_.empty() && history_.back().stamp > loop.query_stamp + 5.0 * options_.max_interpolation_gap;
     return passed ? Loop::Unplaced : Loop::Wait;
   }
   if (pq == Place::Never || pm == Place::Never)
@@ -154,8 +152,8 @@ PoseGraphBuilder::Loop PoseGraphBuilder::addLoop(const LoopMeasurement& loop)
   // match_T_query between cameras -> between the odometry child frames -> between the keyframes.
   const Eigen::Isometry3d a = match.node_T_frame * loop.child_T_camera;
   const Eigen::Isometry3d b = query.node_T_frame * loop.child_T_camera;
-  const Eigen::Isometry3d measurement = a * (loop.has_relative_pose ? loop.match_T_query : Eigen::Isometry3d::Identity()) *
-                                        b.inverse();
+  const Eigen::Isometry3d measurement =
+      a * (loop.has_relative_pose ? loop.match_T_query : Eigen::Isometry3d::Identity()) * b.inverse();
   Loop result = Loop::Added;
   Matrix6d information;
   if (loop.has_relative_pose)
