@@ -10,30 +10,11 @@ namespace openable
 {
 namespace
 {
-/// Sums kx column sums per output pixel and rounds their mean to 8 bits. The channel count is a template
-/// parameter so that the inner loop is unrolled; the mean is a multiplication by the reciprocal in double,
-/// exact here: a quotient n / count of integers below 2^32 is at least 1 / count away from the next integer,
-/// far more than the rounding error of n * (1.0 / count).
-template <int C, typename Sum>
-void meanOfBlocks(const Sum* sums, int out_cols, int kx, uint32_t count, uint8_t* out)
-{
-  const double inverse = 1.0 / double(count);
-  const uint32_t half = count / 2;
-  for (int ox = 0; ox < out_cols; ++ox, sums += kx * C)
-    for (int c = 0; c < C; ++c)
-    {
-      uint32_t s = half;
-      for (int dx = 0; dx < kx; ++dx)
-        s += sums[dx * C + c];
-      out[ox * C + c] = static_cast<uint8_t>(double(s) * inverse);  // round half up
-    }
-}
-}  // namespace
-
-namespace
-{
-/// Column sums of each band of ky rows (a loop the compiler vectorises), then kx of them per pixel: every
-/// input byte is read once and added once. Sum is uint16_t when ky * 255 fits it: twice the lanes per add.
+/// Every kx x ky block of pixels summed in Sum, wide enough for kx * ky * 255: uint16_t when it fits (twice the
+/// lanes of uint32_t per vector add). Per band of ky rows: column sums first, then, still one vectorised pass
+/// per dx, the sums of kx neighbouring pixels at every position; each output pixel takes the one at its
+/// block's start. The mean is a multiplication by the reciprocal in double, exact here: a quotient of integers
+/// below 2^32 is at least 1 / count away from the next integer, far more than the rounding error.
 template <typename Sum>
 void decimateWith(const cv::Mat& image, int kx, int ky, cv::Mat& out)
 {
@@ -41,36 +22,35 @@ void decimateWith(const cv::Mat& image, int kx, int ky, cv::Mat& out)
   const int x0 = (image.cols - out.cols * kx) / 2;
   const int y0 = (image.rows - out.rows * ky) / 2;
   const int row_values = out.cols * kx * channels;
+  const int window_values = row_values - (kx - 1) * channels;  // positions with kx pixels to their right
   const uint32_t count = uint32_t(kx) * uint32_t(ky);
-  std::vector<Sum> column_sums(row_values);
-  Sum* sums = column_sums.data();
+  const double inverse = 1.0 / double(count);
+  std::vector<Sum> column_sums(row_values), block_sums(window_values);
+  Sum* columns = column_sums.data();
+  Sum* blocks = block_sums.data();
   for (int oy = 0; oy < out.rows; ++oy)
   {
     const uint8_t* first = image.ptr<uint8_t>(y0 + oy * ky) + x0 * channels;
     for (int i = 0; i < row_values; ++i)
-      sums[i] = first[i];
+      columns[i] = first[i];
     for (int dy = 1; dy < ky; ++dy)
     {
       const uint8_t* in = image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels;
       for (int i = 0; i < row_values; ++i)
-        sums[i] = static_cast<Sum>(sums[i] + in[i]);
+        columns[i] = static_cast<Sum>(columns[i] + in[i]);
+    }
+    for (int i = 0; i < window_values; ++i)
+      blocks[i] = columns[i];
+    for (int dx = 1; dx < kx; ++dx)
+    {
+      const Sum* shifted = columns + dx * channels;
+      for (int i = 0; i < window_values; ++i)
+        blocks[i] = static_cast<Sum>(blocks[i] + shifted[i]);
     }
     uint8_t* o = out.ptr<uint8_t>(oy);
-    switch (channels)
-    {
-      case 1:
-        meanOfBlocks<1>(sums, out.cols, kx, count, o);
-        break;
-      case 2:
-        meanOfBlocks<2>(sums, out.cols, kx, count, o);
-        break;
-      case 3:
-        meanOfBlocks<3>(sums, out.cols, kx, count, o);
-        break;
-      default:
-        meanOfBlocks<4>(sums, out.cols, kx, count, o);
-        break;
-    }
+    for (int ox = 0; ox < out.cols; ++ox)
+      for (int c = 0; c < channels; ++c)  // round half up
+        o[ox * channels + c] = static_cast<uint8_t>(double(blocks[ox * kx * channels + c] + count / 2) * inverse);
   }
 }
 }  // namespace
@@ -82,7 +62,7 @@ cv::Mat decimate(const cv::Mat& image, int kx, int ky)
   if (kx < 1 || ky < 1 || kx > image.cols || ky > image.rows)
     throw Error("decimate needs block sides between 1 and the image size");
   cv::Mat out(image.rows / ky, image.cols / kx, image.type());
-  if (ky * 255 <= UINT16_MAX)
+  if (uint64_t(kx) * uint64_t(ky) * 255 + uint64_t(kx) * uint64_t(ky) / 2 <= UINT16_MAX)
     decimateWith<uint16_t>(image, kx, ky, out);
   else
     decimateWith<uint32_t>(image, kx, ky, out);

@@ -5,6 +5,7 @@
 //   BM_SequenceMatch/<N>/<L>      one frame of online sequence matching against N stored frames
 //   BM_NaiveSequenceMatch/<N>/<L> the same row computed directly as sum_{k<L} d(t-k, j-k)
 //   BM_MemoryRead/<N>             reading the N descriptors once (a sum over every word)
+//   BM_ImageRead, BM_Config*      the shipped configurations: config_benchmarks.cpp
 //
 // Descriptors are LDB-sized (1386 bits in 22 words, 176 bytes). scripts/bench.sh turns the JSON output
 // into the README table.
@@ -22,6 +23,7 @@
 #include "openable/hamming.h"
 #include "openable/place_database.h"
 #include "openable/sequence_matcher.h"
+#include "config_benchmarks.h"
 
 namespace
 {
@@ -185,6 +187,7 @@ void registerAll()
 int main(int argc, char** argv)
 {
   registerAll();
+  openable_bench::registerConfigBenchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv))
     return 1;
