@@ -98,6 +98,7 @@ const openable::PlaceDatabase& database(const std::string& config_name, size_t n
     randomDescriptor(describer.layout(), rng, d.data());
     db->add(d);
   }
+  db->shrinkToFit();  // as a map loaded from a file is held: exactly its frames
   cached = std::move(db);
   cached_name = config_name;
   return *cached;
