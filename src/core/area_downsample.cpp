@@ -1,5 +1,6 @@
 #include "openable/area_downsample.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <opencv2/imgproc.hpp>
 #include <vector>

@@ -22,8 +22,8 @@ void DescriptorExtractor::describeFloat(const Patch&, float*) const
 
 const std::vector<std::string>& descriptorNames()
 {
-  static const std::vector<std::string> names = {"LDB",  "D-LDB", "BRIEF", "BRISK", "ORB",
-                                                 "FREAK", "SIFT", "SURF",  "HOG",   "HOG-B"};
+  static const std::vector<std::string> names = {"LDB",   "D-LDB", "BRIEF", "BRISK", "ORB",
+                                                 "FREAK", "SIFT",  "SURF",  "HOG",   "HOG-B"};
   return names;
 }
 

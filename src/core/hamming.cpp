@@ -132,8 +132,8 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) uint32_t pairAvx512(const uin
 // eight reductions. W is a template parameter so that the joins are fixed instructions.
 template <size_t W>
 __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowAvx512Packed(const uint64_t* q,
-                                                                                          const uint64_t* rows,
-                                                                                          size_t count, uint32_t* out)
+                                                                                            const uint64_t* rows,
+                                                                                            size_t count, uint32_t* out)
 {
   // The query repeated over eight rows: vector j holds words 8j .. 8j + 7 of that pattern.
   __m512i pattern[W];

@@ -18,12 +18,12 @@
 #include <string>
 #include <vector>
 
+#include "config_benchmarks.h"
 #include "openable/frame_describer.h"
 #include "openable/frame_metric.h"
 #include "openable/hamming.h"
 #include "openable/place_database.h"
 #include "openable/sequence_matcher.h"
-#include "config_benchmarks.h"
 
 namespace
 {

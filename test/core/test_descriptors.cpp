@@ -121,10 +121,9 @@ class EveryDescriptor : public ::testing::TestWithParam<std::string>
 // ---------------------------------------------------------------------------------------------------------
 TEST(DescriptorFactory, BuildsEveryNameWithItsLength)
 {
-  const std::map<std::string, int> lengths = {{"LDB", 1386},  {"D-LDB", 2772}, {"BRIEF", 256},
-                                              {"BRISK", 512}, {"ORB", 256},    {"FREAK", 512},
-                                              {"SIFT", 128},  {"SURF", 64},    {"HOG", 324},
-                                              {"HOG-B", 324}};
+  const std::map<std::string, int> lengths = {{"LDB", 1386}, {"D-LDB", 2772}, {"BRIEF", 256}, {"BRISK", 512},
+                                              {"ORB", 256},  {"FREAK", 512},  {"SIFT", 128},  {"SURF", 64},
+                                              {"HOG", 324},  {"HOG-B", 324}};
   ASSERT_EQ(descriptorNames().size(), lengths.size());
   for (const auto& name : descriptorNames())
   {
@@ -181,8 +180,7 @@ TEST_P(EveryDescriptor, BrightnessChangeIsSmallComparedToAnotherPlace)
   // comes from the saturated pixels. HOG-B's bits flip where two bins are nearly equal: the largest ratio.
   const std::map<std::string, double> measured_worst_ratio = {{"LDB", 0.0037},  {"BRIEF", 0.0102}, {"BRISK", 0.0086},
                                                               {"ORB", 0.0181},  {"FREAK", 0.0068}, {"SIFT", 0.0158},
-                                                              {"SURF", 0.0097}, {"HOG", 0.0296},
-                                                              {"HOG-B", 0.0456}};
+                                                              {"SURF", 0.0097}, {"HOG", 0.0296},   {"HOG-B", 0.0456}};
   const auto extractor = createDescriptorExtractor(configFor(GetParam()));
   double worst_ratio = 0.0;
   for (int i = 0; i < 200; i += 15)
@@ -210,9 +208,9 @@ TEST_P(EveryDescriptor, RealImagesFindTheSamePlaceAcrossTraversals)
 {
   // Measured: { pairs fraction (rounded down at the 4th decimal), hits of 40 }.
   const std::map<std::string, std::pair<double, int>> measured = {
-      {"LDB", {0.9129, 16}},  {"BRIEF", {0.8421, 12}}, {"BRISK", {0.8751, 12}}, {"ORB", {0.8832, 12}},
-      {"FREAK", {0.7745, 8}}, {"SIFT", {0.9568, 26}},  {"SURF", {0.8299, 15}},  {"HOG", {0.9223, 21}},
-      {"HOG-B", {0.8846, 16}}};
+      {"LDB", {0.9129, 16}},  {"BRIEF", {0.8421, 12}}, {"BRISK", {0.8751, 12}},
+      {"ORB", {0.8832, 12}},  {"FREAK", {0.7745, 8}},  {"SIFT", {0.9568, 26}},
+      {"SURF", {0.8299, 15}}, {"HOG", {0.9223, 21}},   {"HOG-B", {0.8846, 16}}};
   const auto extractor = createDescriptorExtractor(configFor(GetParam()));
   std::vector<Described> left, right;
   std::vector<Patch> left_patches, right_patches;
@@ -477,7 +475,8 @@ TEST(HogB, IsPinned)
     for (int x = 0; x < 64; ++x)
       synthetic.intensity.at<float>(y, x) = float(((x * 7 + y * 13) % 31) * 4 + (x * y) % 17 + 2 * x);
   const uint64_t synthetic_print = fingerprint(describe(HogBinaryExtractor(64), synthetic).words);
-  const uint64_t real_print = fingerprint(describe(HogBinaryExtractor(128), patchOf(gardensPoint("day_left", 10), 128)).words);
+  const uint64_t real_print =
+      fingerprint(describe(HogBinaryExtractor(128), patchOf(gardensPoint("day_left", 10), 128)).words);
   std::printf("[ golden ] HOG-B fingerprints: synthetic 0x%016llx, day_left 10 0x%016llx\n",
               static_cast<unsigned long long>(synthetic_print), static_cast<unsigned long long>(real_print));
   EXPECT_EQ(synthetic_print, 0x003854793f580529ULL);

@@ -127,7 +127,8 @@ TEST(RecommendedConfigs, NordlandSummerToWinterFirstHalf)
   // uses. Measured with openable_offline + openable_eval --mask-dark: 0.9209 near-black masked (HOG: 0.9143).
   const Config config = shipped("nordland.yaml");
   ASSERT_EQ(config.descriptor, "HOG-B");
-  const Outcome masked = localise(config, nordlandTraversal("summer", 0, 900), nordlandTraversal("winter", 0, 900), 1, true);
+  const Outcome masked =
+      localise(config, nordlandTraversal("summer", 0, 900), nordlandTraversal("winter", 0, 900), 1, true);
   RecordProperty("recall_at_1_masked", std::to_string(masked.recall()));
   std::printf("[ measured ] Nordland frames 0 .. 899: recall@1 %.4f (%d of %d)\n", masked.recall(), masked.hits,
               masked.evaluated);
