@@ -28,7 +28,7 @@ struct Config
   bool illumination_invariance = false;     ///< paper Eq. 6 before description (needs colour input)
   double alpha = 0.47;                      ///< alpha of Eq. 6 (0.47 for KITTI's Flea2, see Eq. 7)
   int patch_normalization = 0;              ///< block side for local contrast normalisation of patches (0 = off)
-  std::string descriptor = "LDB";           ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG
+  std::string descriptor = "LDB";           ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG
 
   // Matching.
   int sequence_length = 1;      ///< L: a place is the sequence of the last L frames

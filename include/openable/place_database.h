@@ -7,10 +7,13 @@
 #include <vector>
 
 #include "openable/frame_describer.h"
+#include "openable/source_names.h"
 
 namespace openable
 {
-/// What is known about one stored frame besides its descriptor.
+/// What is known about one stored frame besides its descriptor, as add() takes it and info() returns it. The
+/// database keeps less (see PlaceDatabase): the id is implicit, the source name and the pose live in tables
+/// of their own.
 struct FrameInfo
 {
   uint64_t id = 0;        ///< global index: the n-th frame ever added (kept across eviction and save/load)
@@ -23,6 +26,10 @@ struct FrameInfo
 
 /// Contiguous, 64-byte aligned descriptor storage (frame after frame, layout.frameWords() words each) with
 /// per-frame metadata and an optional capacity bound.
+///
+/// A stored frame costs its descriptor plus a 16-byte record (stamp, session, pose index; the id is
+/// firstId() + position) plus its source name front-coded (SourceNames: a few bytes for consecutive files of
+/// one folder or frames of one topic); frames with a pose also hold 56 bytes in the pose table.
 ///
 /// When full, the oldest frames leave first, in batches of capacity/16 (at least one) so that the
 /// storage stays contiguous without moving it on every frame: between 15/16 of the capacity and the whole
@@ -43,11 +50,11 @@ public:
   }
   size_t size() const
   {
-    return infos_.size();
+    return records_.size();
   }
   bool empty() const
   {
-    return infos_.empty();
+    return records_.empty();
   }
   /// Global id of the oldest stored frame (0 until something was evicted).
   uint64_t firstId() const
@@ -79,13 +86,18 @@ public:
   {
     return data_;
   }
-  const FrameInfo& info(size_t position) const
+  /// The frame's metadata, assembled from the record and the tables (the source name is decoded).
+  FrameInfo info(size_t position) const;
+  /// The stamp alone, without decoding the source name.
+  double stamp(size_t position) const
   {
-    return infos_[position];
+    return records_[position].stamp;
   }
 
-  /// Bytes held by descriptors and metadata.
+  /// Bytes held by descriptors and metadata (capacities: what the process holds).
   size_t bytes() const;
+  /// Releases the room kept for frames not added yet (a reference map that no longer grows).
+  void shrinkToFit();
 
   void clear();
 
@@ -102,8 +114,19 @@ public:
   ~PlaceDatabase();
 
 private:
+  /// One stored frame's metadata as kept. 16 bytes: the id is implicit, the source name sits at the same
+  /// position in sources_, the pose in poses_.
+  struct FrameRecord
+  {
+    double stamp = 0.0;
+    uint32_t session = 0;
+    uint32_t pose = kNoPose;  ///< index into poses_
+  };
+  static constexpr uint32_t kNoPose = UINT32_MAX;
+
   void reserve(size_t frames);
   void evictOldest(size_t count);
+  void append(const FrameInfo& info);
   friend void swap(PlaceDatabase& a, PlaceDatabase& b) noexcept;
 
   DescriptorLayout layout_;
@@ -111,7 +134,9 @@ private:
   size_t capacity_ = 0;
   std::string config_yaml_;
   uint64_t first_id_ = 0;
-  std::vector<FrameInfo> infos_;
+  std::vector<FrameRecord> records_;
+  std::vector<std::array<double, 7>> poses_;
+  SourceNames sources_;
   uint64_t* data_ = nullptr;  ///< 64-byte aligned, allocated_ frames
   size_t allocated_ = 0;
 };

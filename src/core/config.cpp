@@ -152,7 +152,7 @@ const std::vector<KeyAccess>& table()
       makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha).range(0, 1).describes(),
       makeKey("patch_normalization", "block side (pixels of the patch) for local contrast normalisation; 0 = off",
               &Config::patch_normalization).range(0, 1024).describes(),
-      makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | SIFT | SURF | HOG", &Config::descriptor).describes(),
+      makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG", &Config::descriptor).describes(),
       makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length).range(1, 10000).live(),
       makeKey("min_sequence_length",
               "sequences of fewer frames are never candidates; 0 = only full sequences of "

@@ -23,7 +23,7 @@ void DescriptorExtractor::describeFloat(const Patch&, float*) const
 const std::vector<std::string>& descriptorNames()
 {
   static const std::vector<std::string> names = {"LDB",   "D-LDB", "BRIEF", "BRISK", "ORB",
-                                                 "FREAK", "SIFT",  "SURF",  "HOG"};
+                                                 "FREAK", "SIFT",  "SURF",  "HOG",   "HOG-B"};
   return names;
 }
 
@@ -53,6 +53,8 @@ std::unique_ptr<DescriptorExtractor> createByName(const Config& config)
     return std::make_unique<SiftExtractor>(p);
   if (name == "HOG")
     return std::make_unique<HogExtractor>(p);
+  if (name == "HOG-B")
+    return std::make_unique<HogBinaryExtractor>(p);
   (void)config;
   return nullptr;
 }

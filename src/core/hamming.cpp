@@ -126,10 +126,83 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) uint32_t pairAvx512(const uin
   return pairAvx512Inline(a, b, words);
 }
 
+// Packed rows of at most 8 words (HOG-B: 6): eight rows are W whole vectors. Their per-word bit counts become
+// bytes, joined in registers; one permutation (VBMI) lays each row's bytes into its own 8-byte group with
+// zeros around them, and one vpsadbw sums every group: eight distances with one horizontal step instead of
+// eight reductions. W is a template parameter so that the joins are fixed instructions.
+template <size_t W>
+__attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowAvx512Packed(const uint64_t* q,
+                                                                                            const uint64_t* rows,
+                                                                                            size_t count, uint32_t* out)
+{
+  // The query repeated over eight rows: vector j holds words 8j .. 8j + 7 of that pattern.
+  __m512i pattern[W];
+  for (size_t j = 0; j < W; ++j)
+  {
+    alignas(64) uint64_t lanes[8];
+    for (size_t k = 0; k < 8; ++k)
+      lanes[k] = q[(8 * j + k) % W];
+    pattern[j] = _mm512_load_si512(lanes);
+  }
+  // Output byte 8r + t takes byte r * W + t (t < W) of the counts; the others are zeroed.
+  alignas(64) uint8_t index[64];
+  uint64_t keep = 0;
+  for (size_t r = 0; r < 8; ++r)
+    for (size_t t = 0; t < 8; ++t)
+    {
+      index[8 * r + t] = static_cast<uint8_t>(t < W ? r * W + t : 0);
+      keep |= uint64_t(t < W) << (8 * r + t);
+    }
+  const __m512i gather = _mm512_load_si512(index);
+  size_t i = 0;
+  for (; i + 8 <= count; i += 8)
+  {
+    const uint64_t* r = rows + i * W;
+    __m128i bytes[8];
+    for (size_t j = 0; j < 8; ++j)
+      bytes[j] = j < W ? _mm512_cvtepi64_epi8(_mm512_popcnt_epi64(
+                             _mm512_xor_si512(_mm512_loadu_si512(r + 8 * j), pattern[j < W ? j : 0])))
+                       : _mm_setzero_si128();
+    __m512i counts = _mm512_castsi128_si512(_mm_unpacklo_epi64(bytes[0], bytes[1]));
+    if (W > 2)
+      counts = _mm512_inserti32x4(counts, _mm_unpacklo_epi64(bytes[2], bytes[3]), 1);
+    if (W > 4)
+      counts = _mm512_inserti32x4(counts, _mm_unpacklo_epi64(bytes[4], bytes[5]), 2);
+    if (W > 6)
+      counts = _mm512_inserti32x4(counts, _mm_unpacklo_epi64(bytes[6], bytes[7]), 3);
+    const __m512i grouped = _mm512_maskz_permutexvar_epi8(keep, gather, counts);
+    const __m512i sums = _mm512_sad_epu8(grouped, _mm512_setzero_si512());
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), _mm512_cvtepi64_epi32(sums));
+  }
+  for (; i < count; ++i)
+    out[i] = pairAvx512Inline(q, rows + i * W, W);
+}
+
+bool hasVbmi()
+{
+  static const bool has = __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi");
+  return has;
+}
+
 __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t* q, const uint64_t* rows,
                                                                   size_t stride, size_t words, size_t count,
                                                                   uint32_t* out)
 {
+  if (words >= 1 && words <= 8 && stride == words && hasVbmi())
+  {
+    using Packed = void (*)(const uint64_t*, const uint64_t*, size_t, uint32_t*);
+    static const Packed packed[9] = {nullptr,
+                                     rowAvx512Packed<1>,
+                                     rowAvx512Packed<2>,
+                                     rowAvx512Packed<3>,
+                                     rowAvx512Packed<4>,
+                                     rowAvx512Packed<5>,
+                                     rowAvx512Packed<6>,
+                                     rowAvx512Packed<7>,
+                                     rowAvx512Packed<8>};
+    packed[words](q, rows, count, out);
+    return;
+  }
   if (words > 24)
   {
     for (size_t i = 0; i < count; ++i)

@@ -38,6 +38,8 @@ LoopDetector::LoopDetector(const Config& config, PlaceDatabase reference_map)
     metric_(database_.layout())
 {
   config.validateOrThrow();
+  // A reference map does not grow in localisation: the room kept for more frames is only memory.
+  database_.shrinkToFit();
   if (database_.layout() != layoutFor(config))
     throw Error(
         "the reference map's descriptors do not match this configuration (descriptor, patch_size, grid, "
@@ -61,7 +63,7 @@ size_t LoopDetector::candidateColumns(double stamp) const
   {
     // Stamps grow along the history (the caller refuses time jumps): drop the recent ones from the end.
     const double newest_allowed = stamp - config_.exclusion_seconds;
-    while (columns > 0 && database_.info(columns - 1).stamp > newest_allowed)
+    while (columns > 0 && database_.stamp(columns - 1) > newest_allowed)
       --columns;
   }
   return columns;

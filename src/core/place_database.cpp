@@ -19,7 +19,9 @@ namespace openable
 namespace
 {
 constexpr char kMagic[8] = {'O', 'P', 'N', 'A', 'B', 'L', 'E', 'M'};
-constexpr uint32_t kVersion = 1;
+/// Version 2 (issue 11): no per-frame id (ids are consecutive from the first id), the pose only when the
+/// frame has one. Version 1 maps still load.
+constexpr uint32_t kVersion = 2;
 constexpr size_t kAlignment = 64;
 
 uint64_t fnv1a(const char* data, size_t size)
@@ -34,8 +36,9 @@ uint64_t fnv1a(const char* data, size_t size)
 }
 
 /// Bytes of one frame's metadata in the file before its source name: id, stamp, session, pose flag, pose,
-/// name length.
-constexpr size_t kFrameInfoBytes = 8 + 8 + 4 + 1 + 7 * 8 + 8;
+/// name length (version 1); stamp, session, pose flag, name length (version 2, the pose only when flagged).
+constexpr size_t kFrameInfoBytesV1 = 8 + 8 + 4 + 1 + 7 * 8 + 8;
+constexpr size_t kFrameInfoBytesV2 = 8 + 4 + 1 + 8;
 /// A stored configuration is a few hundred bytes of YAML.
 constexpr size_t kMaxConfigBytes = 1 << 20;
 
@@ -159,7 +162,9 @@ PlaceDatabase::PlaceDatabase(const PlaceDatabase& other)
     capacity_(other.capacity_),
     config_yaml_(other.config_yaml_),
     first_id_(other.first_id_),
-    infos_(other.infos_)
+    records_(other.records_),
+    poses_(other.poses_),
+    sources_(other.sources_)
 {
   reserve(other.size());
   if (other.size())
@@ -191,7 +196,9 @@ void swap(PlaceDatabase& a, PlaceDatabase& b) noexcept
   swap(a.capacity_, b.capacity_);
   swap(a.config_yaml_, b.config_yaml_);
   swap(a.first_id_, b.first_id_);
-  swap(a.infos_, b.infos_);
+  swap(a.records_, b.records_);
+  swap(a.poses_, b.poses_);
+  swap(a.sources_, b.sources_);
   swap(a.data_, b.data_);
   swap(a.allocated_, b.allocated_);
 }
@@ -209,6 +216,7 @@ void PlaceDatabase::reserve(size_t frames)
   std::free(data_);
   data_ = data;
   allocated_ = frames;
+  records_.reserve(frames);  // the records grow with the descriptors, not by a policy of their own
 }
 
 size_t PlaceDatabase::pendingEviction() const
@@ -232,9 +240,37 @@ uint64_t PlaceDatabase::add(const uint64_t* descriptor, size_t words, FrameInfo 
     reserve(grown);
   }
   std::memcpy(data_ + size() * stride_, descriptor, sizeof(uint64_t) * stride_);
-  info.id = first_id_ + size();
-  infos_.push_back(std::move(info));
-  return infos_.back().id;
+  const uint64_t id = first_id_ + size();
+  append(info);
+  return id;
+}
+
+void PlaceDatabase::append(const FrameInfo& info)
+{
+  FrameRecord record;
+  record.stamp = info.stamp;
+  record.session = info.session;
+  if (info.has_pose)
+  {
+    record.pose = static_cast<uint32_t>(poses_.size());
+    poses_.push_back(info.pose);
+  }
+  records_.push_back(record);
+  sources_.push_back(info.source);
+}
+
+FrameInfo PlaceDatabase::info(size_t position) const
+{
+  const FrameRecord& record = records_.at(position);
+  FrameInfo info;
+  info.id = first_id_ + position;
+  info.stamp = record.stamp;
+  info.session = record.session;
+  info.has_pose = record.pose != kNoPose;
+  if (info.has_pose)
+    info.pose = poses_[record.pose];
+  info.source = sources_.at(position);
+  return info;
 }
 
 void PlaceDatabase::evictOldest(size_t count)
@@ -243,22 +279,51 @@ void PlaceDatabase::evictOldest(size_t count)
   if (count == 0)
     return;
   std::memmove(data_, data_ + count * stride_, sizeof(uint64_t) * stride_ * (size() - count));
-  infos_.erase(infos_.begin(), infos_.begin() + static_cast<long>(count));
+  // Poses are stored in frame order: the evicted frames' poses are the oldest ones.
+  uint32_t dropped_poses = 0;
+  for (size_t i = 0; i < count; ++i)
+    dropped_poses += records_[i].pose != kNoPose;
+  records_.erase(records_.begin(), records_.begin() + static_cast<long>(count));
+  if (dropped_poses)
+  {
+    poses_.erase(poses_.begin(), poses_.begin() + dropped_poses);
+    for (FrameRecord& record : records_)
+      if (record.pose != kNoPose)
+        record.pose -= dropped_poses;
+  }
+  sources_.dropOldest(count);
   first_id_ += count;
 }
 
 size_t PlaceDatabase::bytes() const
 {
-  size_t total = sizeof(uint64_t) * stride_ * allocated_ + sizeof(FrameInfo) * infos_.capacity();
-  for (const auto& info : infos_)
-    total += info.source.capacity() > 15 ? info.source.capacity() : 0;  // beyond the small-string buffer
-  return total;
+  return sizeof(uint64_t) * stride_ * allocated_ + sizeof(FrameRecord) * records_.capacity() +
+         sizeof(std::array<double, 7>) * poses_.capacity() + sources_.bytes();
+}
+
+void PlaceDatabase::shrinkToFit()
+{
+  records_.shrink_to_fit();
+  poses_.shrink_to_fit();
+  sources_.shrinkToFit();
+  if (allocated_ == size() || size() == 0)
+    return;
+  const size_t bytes = (sizeof(uint64_t) * stride_ * size() + kAlignment - 1) / kAlignment * kAlignment;
+  auto* data = static_cast<uint64_t*>(std::aligned_alloc(kAlignment, bytes));
+  if (!data)
+    return;  // keeping the larger block is correct, only less lean
+  std::memcpy(data, data_, sizeof(uint64_t) * stride_ * size());
+  std::free(data_);
+  data_ = data;
+  allocated_ = size();
 }
 
 void PlaceDatabase::clear()
 {
   first_id_ += size();
-  infos_.clear();
+  records_.clear();
+  poses_.clear();
+  sources_.clear();
 }
 
 void PlaceDatabase::save(const std::string& path) const
@@ -275,15 +340,16 @@ void PlaceDatabase::save(const std::string& path) const
   w.put<uint64_t>(first_id_);
   w.put<uint64_t>(size());
   w.putString(config_yaml_);
-  for (const auto& info : infos_)
+  for (size_t i = 0; i < size(); ++i)
   {
-    w.put<uint64_t>(info.id);
-    w.put<double>(info.stamp);
-    w.put<uint32_t>(info.session);
-    w.put<uint8_t>(info.has_pose ? 1 : 0);
-    for (double v : info.pose)
-      w.put<double>(v);
-    w.putString(info.source);
+    const FrameRecord& record = records_[i];
+    w.put<double>(record.stamp);
+    w.put<uint32_t>(record.session);
+    w.put<uint8_t>(record.pose != kNoPose ? 1 : 0);
+    if (record.pose != kNoPose)
+      for (double v : poses_[record.pose])
+        w.put<double>(v);
+    w.putString(sources_.at(i));
   }
   if (size())
     w.putBytes(data_, sizeof(uint64_t) * stride_ * size());
@@ -303,9 +369,9 @@ PlaceDatabase PlaceDatabase::load(const std::string& path)
   char magic[sizeof(kMagic)];
   r.getBytes(magic, sizeof(magic), "magic");
   const auto version = r.get<uint32_t>("version");
-  if (version != kVersion)
+  if (version != 1 && version != kVersion)
     throw Error("map file '" + path + "' has format version " + std::to_string(version) +
-                "; this build reads version " + std::to_string(kVersion));
+                "; this build reads versions 1 to " + std::to_string(kVersion) + " (a newer openable_ros wrote it?)");
   if (fnv1a(bytes.data(), body) != stored_checksum)
     throw Error("map file '" + path + "' is corrupt or truncated (checksum mismatch)");
 
@@ -323,7 +389,8 @@ PlaceDatabase PlaceDatabase::load(const std::string& path)
   const auto frames = r.get<uint64_t>("frame count");
   // The header's counts are bounded by the bytes that are really there before anything is allocated, so
   // a small crafted file cannot ask for gigabytes.
-  if (frames > r.remaining() / (kFrameInfoBytes + sizeof(uint64_t) * layout.frameWords()))
+  const size_t info_bytes = version == 1 ? kFrameInfoBytesV1 : kFrameInfoBytesV2;
+  if (frames > r.remaining() / (info_bytes + sizeof(uint64_t) * layout.frameWords()))
     throw Error("map file '" + path + "' is corrupt (frame count " + std::to_string(frames) + " does not fit its " +
                 std::to_string(bytes.size()) + " bytes)");
   // add() keeps at most `capacity` frames; more than that would be written past the storage.
@@ -333,18 +400,23 @@ PlaceDatabase PlaceDatabase::load(const std::string& path)
   PlaceDatabase db(layout, capacity, r.getString("configuration", kMaxConfigBytes));
   checkStoredConfiguration(db.config_yaml_, path);
   db.first_id_ = first_id;
-  db.infos_.resize(frames);
-  for (auto& info : db.infos_)
+  db.reserve(frames);
+  for (uint64_t i = 0; i < frames; ++i)
   {
-    info.id = r.get<uint64_t>("frame id");
+    FrameInfo info;
+    // Version 1 stored every id; they were always consecutive (add() numbers frames), which version 2 relies on.
+    if (version == 1 && r.get<uint64_t>("frame id") != first_id + i)
+      throw Error("map file '" + path + "' is corrupt (frame ids are not consecutive from the first id " +
+                  std::to_string(first_id) + ")");
     info.stamp = r.get<double>("stamp");
     info.session = r.get<uint32_t>("session");
     info.has_pose = r.get<uint8_t>("pose flag") != 0;
-    for (double& v : info.pose)
-      v = r.get<double>("pose");
+    if (version == 1 || info.has_pose)
+      for (double& v : info.pose)
+        v = r.get<double>("pose");
     info.source = r.getString("source name", 1 << 16);
+    db.append(info);
   }
-  db.reserve(frames);
   if (frames)
     r.getBytes(db.data_, sizeof(uint64_t) * db.stride_ * frames, "descriptors");
   if (r.remaining() != 0)

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "openable/area_downsample.h"
 #include "openable/error.h"
 
 namespace openable
@@ -116,14 +117,15 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
   if (image.cols < across || image.rows < down)
     throw Error("image of " + describeMat(image) + " is too small for " + std::to_string(across) + "x" +
                 std::to_string(down) + " cells (panoramas x grid); expected at least one pixel per cell");
-  // Downsample the 8-bit image first: area interpolation averages the pixels of each patch pixel, and doing
-  // it before the per-pixel work (grey conversion, logarithms) keeps description cheap for large images.
+  // Area averaging of the pixels under each patch pixel, in two steps (area_downsample.h): the exact integer
+  // decimation of the 8-bit image first, one pass over its bytes; then the per-pixel work (grey conversion,
+  // logarithms) on the few pixels left, and the small area step to the patch size on one channel.
   const int p = config_.patch_size;
-  cv::Mat small;
-  cv::resize(image, small, cv::Size(across * p, down * p), 0, 0, cv::INTER_AREA);
-  return split(
-      normalizeBlocks(toOneChannel(small, config_.illumination_invariance, config_.alpha), config_.patch_normalization),
-      cv::Mat(), across);
+  const cv::Size target(across * p, down * p);
+  cv::Mat small = toOneChannel(decimateTowards(image, target), config_.illumination_invariance, config_.alpha);
+  if (small.size() != target)
+    cv::resize(small, small, target, 0, 0, cv::INTER_AREA);
+  return split(normalizeBlocks(small, config_.patch_normalization), cv::Mat(), across);
 }
 
 std::vector<Patch> Preprocessor::patchesFromCameras(const std::vector<cv::Mat>& images) const
@@ -160,8 +162,7 @@ std::vector<Patch> Preprocessor::patchesWithDisparity(const cv::Mat& left, const
   const int p = config_.patch_size;
   const cv::Size target(across * p, down * p);
 
-  cv::Mat small;
-  cv::resize(left, small, target, 0, 0, cv::INTER_AREA);
+  const cv::Mat small = areaDownsample(left, target);
   const cv::Mat intensity = toOneChannel(small, config_.illumination_invariance, config_.alpha);
 
   // Average only valid disparities: invalid ones (NaN, <= 0) must not leak in as huge or zero values.

@@ -5,6 +5,7 @@
 //   BM_SequenceMatch/<N>/<L>      one frame of online sequence matching against N stored frames
 //   BM_NaiveSequenceMatch/<N>/<L> the same row computed directly as sum_{k<L} d(t-k, j-k)
 //   BM_MemoryRead/<N>             reading the N descriptors once (a sum over every word)
+//   BM_ImageRead, BM_Config*      the shipped configurations: config_benchmarks.cpp
 //
 // Descriptors are LDB-sized (1386 bits in 22 words, 176 bytes). scripts/bench.sh turns the JSON output
 // into the README table.
@@ -17,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "config_benchmarks.h"
 #include "openable/frame_describer.h"
 #include "openable/frame_metric.h"
 #include "openable/hamming.h"
@@ -185,6 +187,7 @@ void registerAll()
 int main(int argc, char** argv)
 {
   registerAll();
+  openable_bench::registerConfigBenchmarks();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv))
     return 1;

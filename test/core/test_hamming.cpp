@@ -51,6 +51,28 @@ TEST(Hamming, RowKernelsEqualPairwiseDistancesWithStride)
   }
 }
 
+// Packed rows (stride == words) of up to 8 words, as HOG-B's 6: the AVX-512 kernel handles eight rows at a
+// time there, so every count around multiples of 8 is checked.
+TEST(Hamming, RowKernelsEqualPairwiseDistancesOnPackedSmallRows)
+{
+  std::mt19937_64 rng(11);
+  for (size_t words = 1; words <= 9; ++words)
+    for (size_t count : {0u, 1u, 7u, 8u, 9u, 16u, 37u, 1000u})
+    {
+      const auto query = randomWords(rng, words);
+      const auto rows = randomWords(rng, words * count + 1);  // one word past the last row: never read as a row
+      for (HammingKernel k : supportedKernels())
+      {
+        std::vector<uint32_t> out(count + 1, 12345u);
+        hammingRow(k, query.data(), rows.data(), words, words, count, out.data());
+        for (size_t i = 0; i < count; ++i)
+          ASSERT_EQ(out[i], naiveBitCount(query.data(), rows.data() + i * words, words))
+              << kernelName(k) << " words=" << words << " count=" << count << " row " << i;
+        EXPECT_EQ(out[count], 12345u) << kernelName(k) << ": wrote past the row";
+      }
+    }
+}
+
 TEST(Hamming, BestKernelIsTheLastSupportedAndPortableAlwaysExists)
 {
   const auto kernels = supportedKernels();

@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <random>
+#include <string>
+#include <vector>
 
 #include "openable/error.h"
 #include "openable/place_database.h"
@@ -169,4 +173,197 @@ TEST(PlaceDatabase, SaveIntoUnwritableFolderFailsAndLeavesNothing)
     EXPECT_EQ(readAll(path), "old");
   }
   fs::permissions(dir, fs::perms::owner_all);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Lean metadata (issue 11): a stored frame costs its descriptor plus at most 32 bytes.
+TEST(SourceNames, EveryNameComesBackAfterAddingAndDropping)
+{
+  std::vector<std::string> names;
+  for (int i = 0; i < 100; ++i)
+    names.push_back("/data/gardens_point/day_right/Image" + std::to_string(1000 + i).substr(1) + ".jpg");
+  names.push_back("");
+  names.push_back("");
+  names.push_back(std::string(300, 'x'));  // lengths above 127 take two varint bytes
+  names.push_back(std::string(300, 'x') + "y");
+  names.push_back("camera/image_raw");
+  for (int i = 0; i < 40; ++i)
+    names.push_back("camera/image_raw");  // one topic: nothing but the two length bytes
+  SourceNames table;
+  for (const auto& n : names)
+    table.push_back(n);
+  ASSERT_EQ(table.size(), names.size());
+  for (size_t i = 0; i < names.size(); ++i)
+    EXPECT_EQ(table.at(i), names[i]) << i;
+  EXPECT_THROW(table.at(names.size()), Error);
+  table.dropOldest(37);
+  names.erase(names.begin(), names.begin() + 37);
+  ASSERT_EQ(table.size(), names.size());
+  for (size_t i = 0; i < names.size(); ++i)
+    EXPECT_EQ(table.at(i), names[i]) << i;
+  table.push_back("after");
+  EXPECT_EQ(table.at(table.size() - 1), "after");
+}
+
+TEST(SourceNames, ConsecutiveFileNamesCostAFewBytes)
+{
+  SourceNames table;
+  const int count = 1800;
+  for (int i = 0; i < count; ++i)
+    table.push_back("/work/shared/data/nordland/winter/images-" + std::to_string(100000 + (i + 1) * 10).substr(1) +
+                    ".png");
+  table.shrinkToFit();
+  // Each name is 51 bytes; front-coded ~7, plus a whole name every 16.
+  std::printf("[ measured ] %.1f bytes per name\n", double(table.bytes()) / count);
+  EXPECT_LE(table.bytes(), size_t(12 * count));
+}
+
+TEST(PlaceDatabase, AFrameCostsItsDescriptorPlusAtMost32Bytes)
+{
+  DescriptorLayout hog_b;  // HOG-B: 324 bits in 6 words
+  hog_b.cell_length = 324;
+  hog_b.cell_words = 6;
+  std::mt19937_64 rng(5);
+  PlaceDatabase db(hog_b);
+  const size_t frames = 1000;
+  for (size_t i = 0; i < frames; ++i)
+  {
+    FrameInfo info;
+    info.stamp = 1.5 * i;
+    info.session = 2;
+    info.source = "/work/shared/data/gardens_point/day_right/Image" + std::to_string(1000 + i).substr(1) + ".jpg";
+    db.add(openable_test::randomWords(rng, 6), info);
+  }
+  db.shrinkToFit();
+  const double metadata = double(db.bytes() - frames * 48) / frames;
+  std::printf("[ measured ] %zu bytes for %zu frames: 48 of descriptor + %.1f of metadata per frame\n", db.bytes(),
+              frames, metadata);
+  EXPECT_LE(metadata, 32.0);
+  EXPECT_EQ(db.info(999).source, "/work/shared/data/gardens_point/day_right/Image999.jpg");
+  EXPECT_EQ(db.info(999).stamp, 1.5 * 999);
+  EXPECT_EQ(db.info(999).id, 999u);
+  EXPECT_FALSE(db.info(999).has_pose);
+}
+
+TEST(PlaceDatabase, PosesAndNamesFollowTheirFramesThroughEviction)
+{
+  PlaceDatabase db = filled(0, 32);  // every even frame has a pose {i, 2, 3, ...}
+  std::mt19937_64 rng(9);
+  for (size_t i = 0; i < 100; ++i)
+  {
+    FrameInfo info;
+    info.source = "Image" + std::to_string(i) + ".jpg";
+    info.has_pose = i % 2 == 0;
+    info.pose = {double(i), 2, 3, 0, 0, 0, 1};
+    info.stamp = double(i);
+    db.add(openable_test::randomWords(rng, 22), info);
+  }
+  ASSERT_GT(db.firstId(), 0u);
+  for (size_t position = 0; position < db.size(); ++position)
+  {
+    const FrameInfo info = db.info(position);
+    EXPECT_EQ(info.source, "Image" + std::to_string(info.id) + ".jpg");
+    EXPECT_EQ(info.stamp, double(info.id));
+    EXPECT_EQ(info.has_pose, info.id % 2 == 0);
+    if (info.has_pose)
+    {
+      EXPECT_EQ(info.pose[0], double(info.id));
+    }
+  }
+  // And through a save and load.
+  const std::string path = tempDir() + "/evicted.map";
+  db.save(path);
+  const PlaceDatabase back = PlaceDatabase::load(path);
+  for (size_t position = 0; position < db.size(); ++position)
+  {
+    EXPECT_EQ(back.info(position).source, db.info(position).source);
+    EXPECT_EQ(back.info(position).has_pose, db.info(position).has_pose);
+    EXPECT_EQ(back.info(position).pose, db.info(position).pose);
+    EXPECT_EQ(back.info(position).id, db.info(position).id);
+  }
+}
+
+namespace
+{
+template <typename T>
+void put(std::string& bytes, T value)
+{
+  bytes.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+/// A version 1 map, as builds before issue 11 wrote it: every frame with its id and a pose field.
+std::string versionOneMap(uint64_t first_id, const std::vector<uint64_t>& ids)
+{
+  std::string bytes = "OPNABLEM";
+  put<uint32_t>(bytes, 1);  // version
+  put<uint32_t>(bytes, 1);  // binary
+  put<int32_t>(bytes, 64);  // cell_length
+  put<int32_t>(bytes, 1);   // cell_words
+  put<int32_t>(bytes, 1);   // cells
+  put<int32_t>(bytes, 1);   // blocks
+  put<uint64_t>(bytes, 0);  // capacity
+  put<uint64_t>(bytes, first_id);
+  put<uint64_t>(bytes, ids.size());
+  put<uint64_t>(bytes, 0);  // configuration: empty
+  for (uint64_t id : ids)
+  {
+    put<uint64_t>(bytes, id);
+    put<double>(bytes, 10.0 + double(id));  // stamp
+    put<uint32_t>(bytes, 4);                // session
+    put<uint8_t>(bytes, id % 2);            // pose flag
+    for (int k = 0; k < 7; ++k)
+      put<double>(bytes, double(id + k));
+    const std::string source = "frame" + std::to_string(id);
+    put<uint64_t>(bytes, source.size());
+    bytes += source;
+  }
+  for (uint64_t id : ids)
+    put<uint64_t>(bytes, id * 3);  // descriptors
+  uint64_t hash = 0xcbf29ce484222325ULL;
+  for (unsigned char c : bytes)
+  {
+    hash ^= c;
+    hash *= 0x100000001b3ULL;
+  }
+  put<uint64_t>(bytes, hash);
+  return bytes;
+}
+}  // namespace
+
+TEST(PlaceDatabase, VersionOneMapsLoadAndNonConsecutiveIdsAreRefused)
+{
+  const std::string path = tempDir() + "/version1.map";
+  writeAll(path, versionOneMap(7, {7, 8, 9}));
+  const PlaceDatabase db = PlaceDatabase::load(path);
+  ASSERT_EQ(db.size(), 3u);
+  EXPECT_EQ(db.firstId(), 7u);
+  for (size_t i = 0; i < 3; ++i)
+  {
+    const FrameInfo info = db.info(i);
+    EXPECT_EQ(info.id, 7 + i);
+    EXPECT_EQ(info.stamp, 17.0 + i);
+    EXPECT_EQ(info.session, 4u);
+    EXPECT_EQ(info.source, "frame" + std::to_string(7 + i));
+    EXPECT_EQ(info.has_pose, (7 + i) % 2 == 1);
+    if (info.has_pose)
+    {
+      EXPECT_EQ(info.pose[6], double(7 + i + 6));
+    }
+    EXPECT_EQ(db.descriptor(i)[0], (7 + i) * 3);
+  }
+  // Saved again, it is a version 2 map with the same contents.
+  db.save(path);
+  EXPECT_EQ(readAll(path)[8], 2);
+  EXPECT_EQ(PlaceDatabase::load(path).info(2).source, "frame9");
+
+  writeAll(path, versionOneMap(7, {7, 9, 10}));
+  try
+  {
+    PlaceDatabase::load(path);
+    FAIL() << "accepted ids with a gap";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("not consecutive"), std::string::npos) << e.what();
+  }
 }

@@ -2,7 +2,10 @@
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
+#include <vector>
 
+#include "openable/area_downsample.h"
 #include "openable/error.h"
 #include "openable/preprocessor.h"
 #include "test_util.h"
@@ -182,4 +185,78 @@ TEST(Preprocessor, PatchNormalizationGivesZeroMeanUnitStdBlocksAndKeepsFlatBlock
   cv::Mat brighter = image * 0.5 + 30;
   EXPECT_LT(cv::norm(normalizeBlocks(brighter, 8), out, cv::NORM_INF), 1e-3);
   EXPECT_EQ(cv::norm(normalizeBlocks(image, 0), image, cv::NORM_INF), 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// The two-step area downsampling (area_downsample.h).
+namespace
+{
+/// Naive reference of decimate(): every block summed pixel by pixel, its mean rounded half up.
+cv::Mat naiveDecimate(const cv::Mat& image, int kx, int ky)
+{
+  const int channels = image.channels();
+  cv::Mat out(image.rows / ky, image.cols / kx, image.type());
+  const int x0 = (image.cols - out.cols * kx) / 2;
+  const int y0 = (image.rows - out.rows * ky) / 2;
+  for (int oy = 0; oy < out.rows; ++oy)
+    for (int ox = 0; ox < out.cols; ++ox)
+      for (int c = 0; c < channels; ++c)
+      {
+        long sum = 0;
+        for (int y = y0 + oy * ky; y < y0 + (oy + 1) * ky; ++y)
+          for (int x = x0 + ox * kx; x < x0 + (ox + 1) * kx; ++x)
+            sum += image.ptr<uint8_t>(y)[x * channels + c];
+        const long n = long(kx) * ky;
+        out.ptr<uint8_t>(oy)[ox * channels + c] = static_cast<uint8_t>((sum + n / 2) / n);
+      }
+  return out;
+}
+}  // namespace
+
+TEST(AreaDownsample, DecimateIsTheRoundedBlockMeanForEveryChannelCountAndBlockShape)
+{
+  cv::RNG rng(7);
+  for (int channels = 1; channels <= 4; ++channels)
+    for (const auto& [kx, ky] : std::vector<std::pair<int, int>>{{1, 1}, {2, 1}, {5, 3}, {7, 4}, {10, 7}, {3, 300}})
+    {
+      cv::Mat image(601, 643, CV_8UC(channels));  // not multiples of the blocks: borders are left out
+      rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+      const cv::Mat fast = decimate(image, kx, ky);
+      const cv::Mat naive = naiveDecimate(image, kx, ky);
+      ASSERT_EQ(fast.size(), naive.size());
+      ASSERT_EQ(fast.type(), naive.type());
+      EXPECT_EQ(cv::norm(fast, naive, cv::NORM_INF), 0.0) << channels << " channels, " << kx << "x" << ky;
+    }
+  // Saturated blocks stay 255 (the sums of ky = 300 rows need 32 bits).
+  EXPECT_EQ(cv::norm(decimate(cv::Mat(600, 10, CV_8UC1, cv::Scalar(255)), 1, 300), cv::NORM_INF), 255.0);
+}
+
+TEST(AreaDownsample, ExactIntegerFactorsGiveOpenCvsAreaResize)
+{
+  // 640x480 -> 128x160 is 5x3 blocks: OpenCV's area interpolation is the same block mean.
+  const cv::Mat image = openable_test::gardensPoint("day_right", 100);
+  ASSERT_FALSE(image.empty());
+  cv::Mat vga, expected;
+  cv::resize(image, vga, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+  cv::resize(vga, expected, cv::Size(128, 160), 0, 0, cv::INTER_AREA);
+  EXPECT_LE(cv::norm(decimate(vga, 5, 3), expected, cv::NORM_INF), 1.0);  // rounding of .5 only
+  const cv::Mat two_step = areaDownsample(vga, cv::Size(128, 128));
+  ASSERT_EQ(two_step.size(), cv::Size(128, 128));
+  // Against the one-step area resize: the same picture, up to the blocks the small area step mixes.
+  cv::Mat one_step;
+  cv::resize(vga, one_step, cv::Size(128, 128), 0, 0, cv::INTER_AREA);
+  cv::Mat difference;
+  cv::absdiff(two_step, one_step, difference);
+  EXPECT_LT(cv::mean(difference)[0], 2.0);
+}
+
+TEST(AreaDownsample, BadInputIsAClearError)
+{
+  EXPECT_THROW(decimate(cv::Mat(), 2, 2), Error);
+  EXPECT_THROW(decimate(cv::Mat(10, 10, CV_32FC1), 2, 2), Error);
+  EXPECT_THROW(decimate(cv::Mat(10, 10, CV_8UC1), 0, 2), Error);
+  EXPECT_THROW(decimate(cv::Mat(10, 10, CV_8UC1), 11, 1), Error);
+  EXPECT_THROW(areaDownsample(cv::Mat(10, 10, CV_8UC1), cv::Size(0, 4)), Error);
+  // A target larger than the image is OpenCV's area resize (an upsampling).
+  EXPECT_EQ(areaDownsample(cv::Mat(4, 4, CV_8UC1, cv::Scalar(9)), cv::Size(8, 8)).size(), cv::Size(8, 8));
 }

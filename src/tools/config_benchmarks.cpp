@@ -1,0 +1,205 @@
+// The shipped configurations as a user runs them (issue 11):
+//
+//   BM_ImageRead/640x480              one pass over the bytes of a 640x480 BGR image (the floor for describing it)
+//   BM_ConfigDescribe/<config>        preprocessing + description of that image with config/<config>.yaml
+//   BM_ConfigMatch/<config>/<N>       one frame of sequence matching (the config's L, descriptor and direction)
+//                                     against N stored places: the scan of the history every frame pays
+//   BM_ConfigMemoryRead/<config>/<N>  reading those N descriptors once (a sum over every word)
+//
+// N = 1e5, 1e6, and 1e7 when a place takes at most 64 bytes (a 1e7-place map of HOG would be 13 GB).
+#include "config_benchmarks.h"
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "openable/config.h"
+#include "openable/frame_describer.h"
+#include "openable/place_database.h"
+#include "openable/sequence_matcher.h"
+
+namespace openable_bench
+{
+namespace
+{
+const char* const kConfigs[] = {"gardens_point", "nordland", "default"};
+
+openable::Config shipped(const std::string& name)
+{
+  return openable::Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/" + name + ".yaml");
+}
+
+/// A real image at the size the design targets (Gardens Point, resized to 640x480); noise if missing.
+const cv::Mat& vgaImage()
+{
+  static const cv::Mat image = []
+  {
+    cv::Mat image = cv::imread(std::string(OPENABLE_SOURCE_DIR) + "/data/sample/day_right/Image100.jpg");
+    if (image.empty())
+    {
+      image.create(480, 640, CV_8UC3);
+      cv::randu(image, 0, 255);
+    }
+    cv::resize(image, image, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+    return image;
+  }();
+  return image;
+}
+
+/// One random descriptor of the layout: random bits (unused bits of a cell 0), or random unit vectors.
+void randomDescriptor(const openable::DescriptorLayout& layout, std::mt19937_64& rng, uint64_t* out)
+{
+  for (int cell = 0; cell < layout.cells; ++cell)
+  {
+    uint64_t* words = out + size_t(cell) * layout.cell_words;
+    if (layout.binary)
+    {
+      for (int w = 0; w < layout.cell_words; ++w)
+        words[w] = rng();
+      if (layout.cell_length % 64)
+        words[layout.cell_words - 1] &= (uint64_t(1) << (layout.cell_length % 64)) - 1;
+      continue;
+    }
+    std::vector<float> values(size_t(layout.cell_words) * 2, 0.0f);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    double norm = 0.0;
+    for (int i = 0; i < layout.cell_length; ++i)
+    {
+      values[i] = uniform(rng);
+      norm += double(values[i]) * values[i];
+    }
+    for (int i = 0; i < layout.cell_length; ++i)
+      values[i] = static_cast<float>(values[i] / std::sqrt(norm));
+    std::memcpy(words, values.data(), sizeof(float) * values.size());
+  }
+}
+
+/// A map of N random places in the layout of `config`, built once per (config, N): the largest take
+/// seconds to fill and gigabytes to hold, so only the most recent one is kept.
+const openable::PlaceDatabase& database(const std::string& config_name, size_t n)
+{
+  static std::string cached_name;
+  static std::unique_ptr<openable::PlaceDatabase> cached;
+  if (cached && cached_name == config_name && cached->size() == n)
+    return *cached;
+  cached.reset();
+  const openable::FrameDescriber describer(shipped(config_name));
+  auto db = std::make_unique<openable::PlaceDatabase>(describer.layout());
+  std::mt19937_64 rng(n);
+  openable::FrameDescriptor d(describer.layout().frameWords());
+  for (size_t i = 0; i < n; ++i)
+  {
+    randomDescriptor(describer.layout(), rng, d.data());
+    db->add(d);
+  }
+  db->shrinkToFit();  // as a map loaded from a file is held: exactly its frames
+  cached = std::move(db);
+  cached_name = config_name;
+  return *cached;
+}
+
+void setBytes(benchmark::State& state, const openable::PlaceDatabase& db)
+{
+  const size_t frame_bytes = sizeof(uint64_t) * db.layout().frameWords();
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(db.size() * frame_bytes));
+  state.counters["N"] = double(db.size());
+  state.counters["descriptor_bytes"] = double(frame_bytes);
+  state.counters["map_bytes"] = double(db.bytes());
+}
+
+void imageRead(benchmark::State& state)
+{
+  const cv::Mat& image = vgaImage();
+  const size_t bytes = image.total() * image.elemSize();
+  for (auto _ : state)
+  {
+    // 32-bit lanes the compiler vectorises: the cost of touching every byte once.
+    uint32_t sum = 0;
+    for (int y = 0; y < image.rows; ++y)
+    {
+      const uint8_t* row = image.ptr<uint8_t>(y);
+      for (int x = 0; x < image.cols * image.channels(); ++x)
+        sum += row[x];
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(bytes));
+}
+
+void configDescribe(benchmark::State& state, const std::string& name)
+{
+  const openable::FrameDescriber describer(shipped(name));
+  const cv::Mat& image = vgaImage();
+  for (auto _ : state)
+    benchmark::DoNotOptimize(describer.describeImage(image).data());
+  state.SetItemsProcessed(state.iterations());
+  state.counters["descriptor_bytes"] = double(sizeof(uint64_t) * describer.layout().frameWords());
+}
+
+void configMatch(benchmark::State& state, const std::string& name, size_t n)
+{
+  const openable::Config config = shipped(name);
+  const openable::PlaceDatabase& db = database(name, n);
+  openable::SequenceMatcher matcher(db.layout(), config.sequence_length, config.bidirectional);
+  std::mt19937_64 rng(99);
+  std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));
+  for (auto& q : queries)
+    randomDescriptor(db.layout(), rng, q.data());
+  // The steady state first: every chain full, so each frame both adds and drops a term.
+  for (int i = 0; i <= config.sequence_length; ++i)
+    matcher.match(queries[i % queries.size()].data(), db, n);
+  size_t i = 0;
+  for (auto _ : state)
+  {
+    matcher.match(queries[i++ % queries.size()].data(), db, n);
+    benchmark::DoNotOptimize(matcher.forwardSum(n / 2));
+  }
+  setBytes(state, db);
+}
+
+void configMemoryRead(benchmark::State& state, const std::string& name, size_t n)
+{
+  const openable::PlaceDatabase& db = database(name, n);
+  const uint64_t* words = db.data();
+  const size_t count = n * db.layout().frameWords();
+  for (auto _ : state)
+  {
+    uint64_t x = 0;
+    for (size_t i = 0; i < count; ++i)
+      x += words[i];
+    benchmark::DoNotOptimize(x);
+  }
+  setBytes(state, db);
+}
+}  // namespace
+
+void registerConfigBenchmarks()
+{
+  benchmark::RegisterBenchmark("BM_ImageRead/640x480", imageRead)->Unit(benchmark::kMicrosecond);
+  for (const std::string name : kConfigs)
+    benchmark::RegisterBenchmark(("BM_ConfigDescribe/" + name).c_str(), configDescribe, name)
+        ->Unit(benchmark::kMicrosecond);
+  // Grouped by (config, N), match and read next to each other: the map of one size is built once.
+  for (const std::string name : kConfigs)
+  {
+    const size_t frame_bytes = sizeof(uint64_t) * openable::FrameDescriber(shipped(name)).layout().frameWords();
+    for (size_t n : {size_t(100000), size_t(1000000), size_t(10000000)})
+    {
+      if (n > 1000000 && frame_bytes > 64)
+        continue;
+      const std::string suffix = name + "/" + std::to_string(n);
+      benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n)
+          ->Unit(benchmark::kMillisecond);
+      benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
+}
+
+}  // namespace openable_bench
