@@ -7,8 +7,6 @@
 // With --reference only, the stream is matched against its own past (loop-closure mode); with --query,
 // every query frame is matched against the reference traversal (localisation mode). See --help.
 
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -27,11 +25,11 @@
 #include "openable/config.h"
 #include "openable/error.h"
 #include "openable/image_source.h"
-#include "openable/loop_decision.h"
 #include "openable/npy.h"
 #include "openable/online_detector.h"
 #include "openable/progress.h"
 #include "openable/render.h"
+#include "openable/staged_output.h"
 
 namespace fs = std::filesystem;
 using openable::Error;
@@ -260,42 +258,6 @@ std::string jsonStage(const char* name, double total, size_t frames)
   return out.str();
 }
 
-/// Output files are written into a hidden folder inside DIR and moved into DIR only when the whole run
-/// succeeded: a failed run leaves no partial set behind (and an earlier run's files stay as they were).
-class StagedOutput
-{
-public:
-  explicit StagedOutput(const std::string& dir) : dir_(dir)
-  {
-    std::error_code ec;
-    fs::create_directories(dir_, ec);
-    if (!fs::is_directory(dir_))
-      throw Error("cannot create output folder '" + dir + "'");
-    staging_ = dir_ / (".openable_offline." + std::to_string(::getpid()));
-    fs::remove_all(staging_, ec);
-    if (!fs::create_directory(staging_, ec))
-      throw Error("cannot write into output folder '" + dir + "'");
-  }
-  ~StagedOutput()
-  {
-    std::error_code ec;
-    fs::remove_all(staging_, ec);
-  }
-  std::string path(const std::string& name)
-  {
-    names_.push_back(name);
-    return (staging_ / name).string();
-  }
-  void publish()
-  {
-    for (const auto& name : names_)
-      fs::rename(staging_ / name, dir_ / name);
-  }
-
-private:
-  fs::path dir_, staging_;
-  std::vector<std::string> names_;
-};
 
 std::string formatFloat(float v)
 {
@@ -309,7 +271,7 @@ std::string formatFloat(float v)
 int run(const Options& options)
 {
   const openable::Config config = loadConfig(options);
-  StagedOutput output(options.output);  // fails now, not after minutes of work, when DIR cannot be written
+  openable::StagedOutput output(options.output);  // fails now, not after minutes of work, when DIR cannot be written
   const bool localisation = !options.query.empty();
   Timings timings;
 
