@@ -20,7 +20,6 @@ struct FrameCounters
   uint64_t stored = 0;
   uint64_t skipped_keyframe = 0;
   uint64_t loops = 0;
-  uint64_t matrix_published = 0;
   uint64_t dropped_by_synchroniser = 0;
   std::map<std::string, uint64_t> rejected;      ///< by reason
   std::map<std::string, uint64_t> statuses;      ///< frames per decision status
@@ -39,7 +38,7 @@ class DetectorDiagnostics
 {
 public:
   void fill(diagnostic_updater::DiagnosticStatusWrapper& status, const FrameCounters& counters,
-            const openable::OnlineDetector& detector, const RosParameters& parameters);
+            uint64_t matrix_published, const openable::OnlineDetector& detector, const RosParameters& parameters);
 
 private:
   uint64_t received_at_last_ = 0;

@@ -61,10 +61,19 @@ size_t LoopDetector::candidateColumns(double stamp) const
   size_t columns = database_.size() > excluded ? database_.size() - excluded : 0;
   if (config_.exclusion_seconds > 0.0 && stamp > 0.0)
   {
-    // Stamps grow along the history (the caller refuses time jumps): drop the recent ones from the end.
+    // Stamps grow along the history (the caller refuses time jumps): the first position stamped too
+    // recently, by binary search.
     const double newest_allowed = stamp - config_.exclusion_seconds;
-    while (columns > 0 && database_.stamp(columns - 1) > newest_allowed)
-      --columns;
+    size_t low = 0, high = columns;
+    while (low < high)
+    {
+      const size_t middle = low + (high - low) / 2;
+      if (database_.stamp(middle) > newest_allowed)
+        high = middle;
+      else
+        low = middle + 1;
+    }
+    columns = low;
   }
   return columns;
 }
@@ -106,13 +115,18 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
   while (taken.size() < wanted)
   {
     size_t best = row.size();
+    size_t finite = 0;
     for (size_t c = 0; c < row.size(); ++c)
-      if (std::isfinite(row[c]) && (best == row.size() || row[c] < row[best]))
-        best = c;
+      if (std::isfinite(row[c]))
+      {
+        ++finite;
+        if (best == row.size() || row[c] < row[best])
+          best = c;
+      }
+    if (taken.empty())
+      detection.candidates = finite;  // counted in the first scan: no extra pass over N
     if (best == row.size())
       break;
-    if (taken.empty())
-      detection.candidates = static_cast<size_t>(std::count_if(row.begin(), row.end(), [](float v) { return std::isfinite(v); }));
     taken.push_back(best);
     const size_t from = static_cast<size_t>(std::max<long>(0, long(best) - window));
     const size_t to = std::min(row.size(), best + static_cast<size_t>(window) + 1);

@@ -199,7 +199,10 @@ void OnlineDetector::verify(const FrameInput& input, FrameOutcome& outcome)
     if (!verifier_)
       outcome.verification_note = "no camera yet";
     else if (!query)
-      outcome.verification_note = outcome.verification_note.empty() ? "no query features" : outcome.verification_note;
+    {
+      if (outcome.verification_note.empty())  // else it already says why extraction failed
+        outcome.verification_note = "no query features";
+    }
     else if (!match)
       outcome.verification_note = "match frame has no features (it came before the camera, or was evicted)";
     else

@@ -67,6 +67,10 @@ std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle p
     ROS_ERROR_STREAM_NAMED(name, "cannot build the detector: " << e.what() << "; this nodelet stays idle");
     return nullptr;
   }
+  d->poses_ = std::make_unique<PoseLookup>(nh, parameters.fixed_frame, parameters.tf_timeout);
+  d->matrix_ = std::make_unique<MatrixPublisher>(nh, parameters.matrix_rate, parameters.matrix_size,
+                                                 parameters.matrix_mode, parameters.matrix_threshold_view);
+  d->markers_ = std::make_unique<LoopMarkers>(nh, parameters.fixed_frame, parameters.markers_rate);
   const std::string& map_file = parameters.map_file;
   if (!map_file.empty())
   {
@@ -80,10 +84,6 @@ std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle p
     else
       ROS_WARN_STREAM_NAMED(name, "~map_file: " << message << "; starting a new history instead");
   }
-  d->poses_ = std::make_unique<PoseLookup>(nh, parameters.fixed_frame, parameters.tf_timeout);
-  d->matrix_ = std::make_unique<MatrixPublisher>(nh, parameters.matrix_rate, parameters.matrix_size,
-                                                 parameters.matrix_mode, parameters.matrix_threshold_view);
-  d->markers_ = std::make_unique<LoopMarkers>(nh, parameters.fixed_frame, parameters.markers_rate);
   d->loop_pub_ = nh.advertise<LoopClosure>("loop_closures", 100);
   d->decisions_pub_ = nh.advertise<LoopClosure>("decisions", 100);
   d->services_ = std::make_unique<MapServices>(pnh, *d);
@@ -230,7 +230,6 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
   const std::string error = matrix_->publish(header, detector_->config());
   if (!error.empty())
     warnThrottled("render", kWarnPeriod, error);
-  counters_.matrix_published = matrix_->published();
   markers_->publish(header.stamp, outcome.published());
 }
 
@@ -320,9 +319,7 @@ bool Detector::saveMap(const std::string& path, std::string& message, uint32_t& 
 
 bool Detector::loadMap(const std::string& path, std::string& message, uint32_t& frames)
 {
-  std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
-  if (matrix_)
-    lock.lock();  // not yet during create(): nothing else runs then
+  std::lock_guard<std::mutex> lock(mutex_);
   try
   {
     auto map = openable::loadReferenceMap(path, detector_->config());
@@ -334,8 +331,7 @@ bool Detector::loadMap(const std::string& path, std::string& message, uint32_t& 
     message = e.what();
     return false;
   }
-  if (matrix_)
-    resetLocked();
+  resetLocked();
   message = "map '" + path + "' loaded: " + std::to_string(frames) + " frames; localising against it";
   return true;
 }
@@ -386,7 +382,7 @@ void Detector::applyLive(openable::Config& requested, RosParameters& display)
 void Detector::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status)
 {
   std::lock_guard<std::mutex> lock(mutex_);
-  diagnostics_.fill(status, counters_, *detector_, parameters_);
+  diagnostics_.fill(status, counters_, matrix_->published(), *detector_, parameters_);
 }
 
 }  // namespace openable_ros

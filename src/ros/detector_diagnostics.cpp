@@ -22,7 +22,8 @@ void FrameCounters::addTimes(const openable::StageTimes& times)
 }
 
 void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& status, const FrameCounters& counters,
-                               const openable::OnlineDetector& detector, const RosParameters& parameters)
+                               uint64_t matrix_published, const openable::OnlineDetector& detector,
+                               const RosParameters& parameters)
 {
   const ros::WallTime now = ros::WallTime::now();
   const double elapsed = std::max(1e-6, (now - last_).toSec());
@@ -63,7 +64,7 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("match latency last (ms)", counters.match_ms_last);
   status.add("match latency mean (ms)", counters.match_ms_total / timed);
   status.add("loop closures", counters.loops);
-  status.add("distance_matrix images published", counters.matrix_published);
+  status.add("distance_matrix images published", matrix_published);
   if (parameters.verify)
     status.add("verification", detector.hasVerifier() ? "on" : "waiting for camera_info");
   for (const auto& v : counters.verification)
