@@ -64,6 +64,7 @@ private:
   uint64_t run_start_match_ = 0;  ///< best match of the run's first frame
   uint64_t previous_match_ = 0;   ///< best match of the previous frame
   int previous_direction_ = 1;
+  uint32_t previous_session_ = 0;
 };
 
 }  // namespace openable

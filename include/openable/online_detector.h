@@ -54,11 +54,11 @@ struct FrameOutcome
 {
   FrameStatus status = FrameStatus::TooEarly;
   bool stored = false;  ///< added to the history (loop-closure mode) / matched (localisation)
-  FrameInfo query;      ///< the frame as stored (its id is set)
+  FrameInfo query;      ///< the frame as stored (its id and session are set)
   Detection detection;  ///< candidates, uniqueness, ...
   float score = 0.0f;   ///< decision score, higher = surer (LoopDecision::score)
   bool has_match_info = false;
-  FrameInfo match;        ///< the best match's stored info, when it is still in the history
+  FrameInfo match;        ///< the best match's stored info (with its session), when it is still in the map
   bool verified = false;  ///< `verification` holds an accepted relative pose
   Verification verification;
   std::string verification_note;  ///< why verification did not run or failed (empty when verified)
@@ -83,6 +83,12 @@ public:
   /// Localisation against a saved or built map. Throws Error when the map is empty or built with another
   /// descriptor configuration.
   OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options = OnlineOptions());
+  /// A saved map of one or more sessions, localised against (MapMode::Localise) or continued as the new
+  /// session `session` (MapMode::Continue: loops within the new session and with every earlier one).
+  /// Throws Error when the map is empty (localising), was built with another layout, or already holds a
+  /// session of that name.
+  OnlineDetector(const Config& config, SessionMap map, MapMode mode, SessionInfo session,
+                 const OnlineOptions& options = OnlineOptions());
 
   /// Describes, stores, matches and decides. Bad images throw Error / cv::Exception before anything is
   /// stored, so a caller can report and carry on.

@@ -94,6 +94,11 @@ public:
     return records_[position].stamp;
   }
 
+  /// Gives the stored frames ids from `first_id` on (a map merged after another continues its ids).
+  void renumber(uint64_t first_id);
+  /// Keeps room for `frames` frames without growing again.
+  void reserve(size_t frames);
+
   /// Bytes held by descriptors and metadata (capacities: what the process holds).
   size_t bytes() const;
   /// Releases the room kept for frames not added yet (a reference map that no longer grows).
@@ -101,11 +106,11 @@ public:
 
   void clear();
 
-  /// Versioned binary file: header (magic, version, layout, counts), the configuration YAML, metadata,
-  /// descriptors, and a 64-bit checksum of everything before it. Written to a temporary file in the same
-  /// folder and renamed over `path`, so a crash never leaves a partial map. Throws Error.
+  /// The map file of SessionMap (versioned, checksummed, written atomically) with this one session.
+  /// Throws Error.
   void save(const std::string& path) const;
-  /// Throws Error naming what is wrong: missing, not a map, unsupported version, truncated, checksum.
+  /// A map file of one session (any format version). Throws Error naming what is wrong: missing, not a
+  /// map, unsupported version, truncated, checksum, or several sessions (use SessionMap::load).
   static PlaceDatabase load(const std::string& path);
 
   PlaceDatabase(const PlaceDatabase& other);
@@ -124,7 +129,6 @@ private:
   };
   static constexpr uint32_t kNoPose = UINT32_MAX;
 
-  void reserve(size_t frames);
   void evictOldest(size_t count);
   void append(const FrameInfo& info);
   friend void swap(PlaceDatabase& a, PlaceDatabase& b) noexcept;

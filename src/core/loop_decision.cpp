@@ -71,7 +71,8 @@ bool LoopDecision::gatesPass(const Detection& detection, FrameStatus& why) const
 
 bool LoopDecision::advancesWithRun(const Detection& detection) const
 {
-  if (run_ == 0 || detection.best.direction != previous_direction_)
+  // A run follows one route: a match in another session starts a new run.
+  if (run_ == 0 || detection.best.direction != previous_direction_ || detection.best.session != previous_session_)
     return false;
   // Same direction: the match moves one place forward per frame; reverse: one place back. Checked per
   // step and over the whole run, so a match that stays put (a "hub" place every frame matches) never
@@ -106,6 +107,7 @@ FrameStatus LoopDecision::decide(const Detection& detection)
     }
     previous_match_ = detection.best.id;
     previous_direction_ = detection.best.direction;
+    previous_session_ = detection.best.session;
     return run_ >= config_.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;
   }
   reset();

@@ -28,9 +28,17 @@ double millisecondsSince(std::chrono::steady_clock::time_point start)
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-PlaceDatabase nonEmpty(PlaceDatabase map)
+template <typename Map>
+Map nonEmpty(Map map)
 {
   if (map.empty())
+    throw Error("the reference map holds no frame; expected a map with at least one place");
+  return map;
+}
+
+SessionMap nonEmptyWhenLocalising(SessionMap map, MapMode mode)
+{
+  if (mode == MapMode::Localise && map.frameCount() == 0)
     throw Error("the reference map holds no frame; expected a map with at least one place");
   return map;
 }
@@ -68,6 +76,18 @@ OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map
     options_(options),
     describer_(config),
     detector_(config, nonEmpty(std::move(reference_map))),
+    decision_(config),
+    features_(options.feature_bytes)
+{
+  checkOptions(options);
+}
+
+OnlineDetector::OnlineDetector(const Config& config, SessionMap map, MapMode mode, SessionInfo session,
+                               const OnlineOptions& options)
+  : config_(config),
+    options_(options),
+    describer_(config),
+    detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, std::move(session)),
     decision_(config),
     features_(options.feature_bytes)
 {
@@ -151,17 +171,19 @@ FrameOutcome OnlineDetector::process(const FrameInput& input)
   outcome.detection = detector_.process(descriptor, outcome.query);
   outcome.stored = true;
   outcome.query.id = outcome.detection.query_id;
+  if (!detector_.localisationMode())
+    outcome.query.session = static_cast<uint32_t>(detector_.ownSession());
   outcome.status = decision_.decide(outcome.detection);
   outcome.score = decision_.score(outcome.detection);
   if (outcome.detection.has_candidates)
   {
-    const PlaceDatabase& database = detector_.database();
+    const PlaceDatabase& frames = detector_.map().frames(outcome.detection.best.session);
     const uint64_t id = outcome.detection.best.id;
     // Looked up by id: storing the query may have evicted the oldest frames.
-    if (id >= database.firstId() && id - database.firstId() < database.size())
+    if (id >= frames.firstId() && id - frames.firstId() < frames.size())
     {
       outcome.has_match_info = true;
-      outcome.match = database.info(static_cast<size_t>(id - database.firstId()));
+      outcome.match = frames.info(static_cast<size_t>(id - frames.firstId()));
     }
   }
   outcome.times.match_ms = millisecondsSince(start);

@@ -5,14 +5,14 @@
 
 namespace openable
 {
-PlaceDatabase loadReferenceMap(const std::string& path, const Config& config)
+SessionMap loadReferenceMap(const std::string& path, const Config& config)
 {
   const std::string refused = "map '" + path + "' refused: ";
-  PlaceDatabase map = [&]()
+  SessionMap map = [&]()
   {
     try
     {
-      return PlaceDatabase::load(path);
+      return SessionMap::load(path);
     }
     catch (const Error& e)
     {
@@ -30,16 +30,12 @@ PlaceDatabase loadReferenceMap(const std::string& path, const Config& config)
   {
     throw Error(refused + "its configuration cannot be read (" + e.what() + ")");
   }
-  std::string differences;
-  for (const auto& key : Config::descriptorKeys())
-    if (map_config.get(key) != config.get(key))
-      differences += (differences.empty() ? "" : ", ") + key + " '" + map_config.get(key) + "' (running '" +
-                     config.get(key) + "')";
+  const std::string differences = descriptorDifferences(map_config, config, "running");
   if (!differences.empty())
     throw Error(refused + "it was built with an incompatible configuration: " + differences);
   if (map.layout() != FrameDescriber(config).layout())
     throw Error(refused + "its descriptor layout differs from this detector's");
-  if (map.empty())
+  if (map.frameCount() == 0)
     throw Error(refused + "it holds no frame; expected a map with at least one place");
   return map;
 }

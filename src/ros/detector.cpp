@@ -213,7 +213,7 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
   if (matrix_->wanted())
   {
     detector_->loopDetector().lastRow(row_);
-    matrix_->addRow(detector_->loopDetector().database().firstId(), row_);
+    matrix_->addRow(detector_->loopDetector().map().frames(0).firstId(), row_);
   }
 
   LoopClosurePtr msg = makeLoopClosure(header, outcome);
@@ -304,9 +304,9 @@ bool Detector::saveMap(const std::string& path, std::string& message, uint32_t& 
   std::lock_guard<std::mutex> lock(mutex_);
   try
   {
-    const openable::PlaceDatabase& database = detector_->loopDetector().database();
-    database.save(path);
-    frames = uint32_t(database.size());
+    const openable::SessionMap& map = detector_->loopDetector().map();
+    map.save(path);
+    frames = uint32_t(map.frameCount());
     message = "saved " + std::to_string(frames) + " frames to '" + path + "'";
     return true;
   }
@@ -323,8 +323,10 @@ bool Detector::loadMap(const std::string& path, std::string& message, uint32_t& 
   try
   {
     auto map = openable::loadReferenceMap(path, detector_->config());
-    frames = uint32_t(map.size());
-    detector_ = std::make_unique<openable::OnlineDetector>(detector_->config(), std::move(map), options_);
+    frames = uint32_t(map.frameCount());
+    detector_ = std::make_unique<openable::OnlineDetector>(detector_->config(), std::move(map),
+                                                           openable::MapMode::Localise, openable::SessionInfo(),
+                                                           options_);
   }
   catch (const openable::Error& e)
   {

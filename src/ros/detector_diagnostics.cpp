@@ -56,8 +56,8 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("sequence length", config.sequence_length);
   status.add("exclusion window", config.exclusion_window);
   status.add("min uniqueness", config.min_uniqueness);
-  status.add("history size", detector.loopDetector().database().size());
-  status.add("history bytes", detector.loopDetector().database().bytes());
+  status.add("history size", detector.loopDetector().map().frameCount());
+  status.add("history bytes", detector.loopDetector().map().bytes());
   const double timed = double(std::max<uint64_t>(1, counters.timed));
   status.add("describe latency last (ms)", counters.describe_ms_last);
   status.add("describe latency mean (ms)", counters.describe_ms_total / timed);

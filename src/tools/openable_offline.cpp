@@ -407,8 +407,8 @@ int run(const Options& options)
        << jsonStage("describe", timings.describe, timings.frames) << ",\n"
        << jsonStage("match", timings.match, timings.frames) << ",\n"
        << "  \"frames\": " << timings.frames << ",\n"
-       << "  \"descriptor_bytes\": " << sizeof(uint64_t) * detector->loopDetector().database().layout().frameWords()
-       << ",\n  \"database_bytes\": " << detector->loopDetector().database().bytes() << "\n}\n";
+       << "  \"descriptor_bytes\": " << sizeof(uint64_t) * detector->loopDetector().map().layout().frameWords()
+       << ",\n  \"database_bytes\": " << detector->loopDetector().map().bytes() << "\n}\n";
   openable::writeFileAtomically(output.path("timings.json"), json.str());
   output.publish();
 

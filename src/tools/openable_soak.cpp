@@ -111,7 +111,7 @@ void soak(const Options& o)
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     char line[160];
-    std::snprintf(line, sizeof(line), "  %6zu  %7zu  %7.1f   %30.0f   %5.1f\n", frame, detector.database().size(),
+    std::snprintf(line, sizeof(line), "  %6zu  %7zu  %7.1f   %30.0f   %5.1f\n", frame, detector.map().frameCount(),
                   rss / 1e6,
                   frame > first_frame ? (double(rss) - double(first_rss)) / double(frame - first_frame) : 0.0, seconds);
     std::cout << line << std::flush;

@@ -120,7 +120,7 @@ TEST(LoopDetector, LocalisationModeMatchesAgainstAFixedMap)
     EXPECT_EQ(d.best.id, uint64_t(i));
     EXPECT_FLOAT_EQ(d.best.distance, 0.0f);
   }
-  EXPECT_EQ(detector.database().size(), 30u);  // nothing added to the map
+  EXPECT_EQ(detector.map().frameCount(), 30u);  // nothing added to the map
 
   Config other = c;
   other.descriptor = "ORB";
@@ -136,7 +136,7 @@ TEST(LoopDetector, UpdateMatchingChangesLiveKeysAndRefusesDescriptorKeys)
   live.sequence_length = 8;
   live.exclusion_window = 2;
   detector.updateMatching(live);
-  EXPECT_EQ(detector.matcher().sequenceLength(), 8);
+  EXPECT_EQ(detector.sequenceLength(), 8);
   EXPECT_DOUBLE_EQ(detector.config().threshold, 0.3);
   Config bad = live;
   bad.patch_size = 32;
@@ -144,7 +144,7 @@ TEST(LoopDetector, UpdateMatchingChangesLiveKeysAndRefusesDescriptorKeys)
   Config invalid = live;
   invalid.sequence_length = 0;
   EXPECT_THROW(detector.updateMatching(invalid), Error);
-  EXPECT_EQ(detector.matcher().sequenceLength(), 8);  // unchanged after a refusal
+  EXPECT_EQ(detector.sequenceLength(), 8);  // unchanged after a refusal
 }
 
 TEST(LoopDetector, ResetForgetsHistoryButKeepsIdsIncreasing)
@@ -154,7 +154,7 @@ TEST(LoopDetector, ResetForgetsHistoryButKeepsIdsIncreasing)
   for (int i = 0; i < 5; ++i)
     detector.process(openable_test::randomWords(rng, 22));
   detector.reset();
-  EXPECT_EQ(detector.database().size(), 0u);
+  EXPECT_EQ(detector.map().frameCount(), 0u);
   const Detection d = detector.process(openable_test::randomWords(rng, 22));
   EXPECT_EQ(d.query_id, 5u);
   EXPECT_FALSE(d.has_candidates);

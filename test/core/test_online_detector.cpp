@@ -163,7 +163,7 @@ TEST(OnlineDetector, ATimeJumpIsRefusedAndNothingIsStored)
   const FrameOutcome jumped = detector.process(input);
   EXPECT_EQ(jumped.status, FrameStatus::TimeJump);
   EXPECT_FALSE(jumped.stored);
-  EXPECT_EQ(detector.loopDetector().database().size(), 3u);
+  EXPECT_EQ(detector.loopDetector().map().frameCount(), 3u);
   detector.reset();  // a new stream may start earlier
   EXPECT_TRUE(detector.process(input).stored);
 }
@@ -261,7 +261,7 @@ TEST(OnlineDetector, BadInputThrowsBeforeAnythingIsStored)
 {
   OnlineDetector detector(shipped("default"));
   EXPECT_THROW(detector.process(FrameInput()), Error);
-  EXPECT_EQ(detector.loopDetector().database().size(), 0u);
+  EXPECT_EQ(detector.loopDetector().map().frameCount(), 0u);
   Config stereo = shipped("paper");
   stereo.camera_type = "stereo";
   stereo.descriptor = "D-LDB";
@@ -277,5 +277,5 @@ TEST(OnlineDetector, BadInputThrowsBeforeAnythingIsStored)
   {
     EXPECT_NE(std::string(e.what()).find("right image or a disparity"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(dldb.loopDetector().database().size(), 0u);
+  EXPECT_EQ(dldb.loopDetector().map().frameCount(), 0u);
 }

@@ -351,9 +351,9 @@ TEST(PlaceDatabase, VersionOneMapsLoadAndNonConsecutiveIdsAreRefused)
     }
     EXPECT_EQ(db.descriptor(i)[0], (7 + i) * 3);
   }
-  // Saved again, it is a version 2 map with the same contents.
+  // Saved again, it is a version 3 map (one session) with the same contents.
   db.save(path);
-  EXPECT_EQ(readAll(path)[8], 2);
+  EXPECT_EQ(readAll(path)[8], 3);
   EXPECT_EQ(PlaceDatabase::load(path).info(2).source, "frame9");
 
   writeAll(path, versionOneMap(7, {7, 9, 10}));

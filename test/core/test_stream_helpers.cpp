@@ -123,7 +123,7 @@ TEST(ReferenceMap, LoadsACompatibleMapAndRefusesOthersNamingWhy)
   map.add(describer.describeImage(openable_test::gardensPoint("day_right", 0)));
   const std::string good = dir + "/reference_" + std::to_string(::getpid()) + ".map";
   map.save(good);
-  EXPECT_EQ(loadReferenceMap(good, config).size(), 1u);
+  EXPECT_EQ(loadReferenceMap(good, config).frameCount(), 1u);
 
   Config other = config;
   other.patch_size = 32;

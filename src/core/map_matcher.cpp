@@ -1,0 +1,196 @@
+#include "openable/map_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "openable/error.h"
+
+namespace openable
+{
+MapMatcher::MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences)
+  : config_(config), partial_sequences_(partial_sequences), metric_(layout)
+{
+}
+
+int MapMatcher::minTerms() const
+{
+  if (!partial_sequences_ || config_.min_sequence_length == 0)
+    return config_.sequence_length;
+  return config_.min_sequence_length;
+}
+
+size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const
+{
+  if (!own)
+    return frames.size();
+  const size_t excluded = static_cast<size_t>(config_.exclusion_window);
+  size_t columns = frames.size() > excluded ? frames.size() - excluded : 0;
+  if (config_.exclusion_seconds > 0.0 && stamp > 0.0)
+  {
+    // Stamps grow along a session (the caller refuses time jumps): the first position stamped too
+    // recently, by binary search.
+    const double newest_allowed = stamp - config_.exclusion_seconds;
+    size_t low = 0, high = columns;
+    while (low < high)
+    {
+      const size_t middle = low + (high - low) / 2;
+      if (frames.stamp(middle) > newest_allowed)
+        high = middle;
+      else
+        low = middle + 1;
+    }
+    columns = low;
+  }
+  return columns;
+}
+
+Candidate MapMatcher::candidateAt(const SessionMap& map, size_t entry) const
+{
+  const auto session = static_cast<uint32_t>(std::upper_bound(offsets_.begin(), offsets_.end(), entry) -
+                                             offsets_.begin() - 1);
+  const size_t column = entry - offsets_[session];
+  const SequenceMatcher& matcher = matchers_[session];
+  const PlaceDatabase& frames = map.frames(session);
+  Candidate c;
+  int direction = 1;
+  c.distance = matcher.normalized(column, &direction, minTerms());
+  c.direction = static_cast<int8_t>(direction);
+  c.session = session;
+  c.id = matcher.firstId() + column;
+  c.position = static_cast<size_t>(c.id - frames.firstId());
+  c.sequence_length = direction > 0 ? matcher.forwardCount(column) : matcher.reverseCount(column);
+  if (frames.layout().blocks > 1)
+  {
+    int shift = 0;
+    metric_.distance(last_query_.data(), frames.descriptor(c.position), &shift);
+    c.shift = static_cast<int16_t>(shift);
+  }
+  return c;
+}
+
+Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp)
+{
+  if (query.size() != map.layout().frameWords())
+    throw Error("descriptor of " + std::to_string(query.size()) + " words does not fit the map's " +
+                std::to_string(map.layout().frameWords()) + " words");
+  last_query_ = query;
+  while (matchers_.size() < map.sessionCount())
+    matchers_.emplace_back(map.layout(), config_.sequence_length, config_.bidirectional);
+
+  // Every session's row, one after another (reused: no allocation of N floats per frame).
+  std::vector<float>& row = row_;
+  row.clear();
+  offsets_.clear();
+  bool own_excluded = false;
+  for (uint32_t s = 0; s < map.sessionCount(); ++s)
+  {
+    const bool own = static_cast<int>(s) == own_session;
+    const PlaceDatabase& frames = map.frames(s);
+    const size_t columns = candidateColumns(frames, own, stamp);
+    own_excluded = own_excluded || (own && columns == 0 && !frames.empty());
+    matchers_[s].match(query.data(), frames, columns);
+    offsets_.push_back(row.size());
+    if (s == 0)
+      matchers_[s].normalizedRow(row, nullptr, minTerms());  // the one session of a stream: no copy
+    else
+    {
+      matchers_[s].normalizedRow(session_row_, nullptr, minTerms());
+      row.insert(row.end(), session_row_.begin(), session_row_.end());
+    }
+  }
+  offsets_.push_back(row.size());
+
+  // Top-k distinct places: repeatedly the smallest distance outside the windows of those already taken
+  // (a window never reaches into another session).
+  Detection detection;
+  const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
+  const size_t window = static_cast<size_t>(config_.uniqueness_window);
+  std::vector<size_t> taken;
+  while (taken.size() < wanted)
+  {
+    size_t best = row.size();
+    size_t finite = 0;
+    for (size_t c = 0; c < row.size(); ++c)
+      if (std::isfinite(row[c]))
+      {
+        ++finite;
+        if (best == row.size() || row[c] < row[best])
+          best = c;
+      }
+    if (taken.empty())
+      detection.candidates = finite;  // counted in the first scan: no extra pass over N
+    if (best == row.size())
+      break;
+    taken.push_back(best);
+    const auto session = std::upper_bound(offsets_.begin(), offsets_.end(), best) - 1;
+    const size_t from = std::max(*session, best > window ? best - window : 0);
+    const size_t to = std::min(*(session + 1), best + window + 1);
+    std::fill(row.begin() + static_cast<long>(from), row.begin() + static_cast<long>(to), std::nanf(""));
+  }
+  for (size_t i = 0; i < taken.size() && i < static_cast<size_t>(config_.top_k); ++i)
+    detection.top.push_back(candidateAt(map, taken[i]));
+
+  // No candidate although the stream's own past exists and nothing else is in the map: the exclusion.
+  detection.excluded = detection.top.empty() && own_excluded &&
+                       map.frameCount() == map.frames(static_cast<uint32_t>(own_session)).size();
+  if (!detection.top.empty())
+  {
+    detection.has_candidates = true;
+    detection.best = detection.top.front();
+    if (taken.size() < 2)
+      detection.uniqueness = 1.0f;
+    else
+    {
+      const float second = candidateAt(map, taken[1]).distance;
+      detection.uniqueness = second > 0.0f ? 1.0f - detection.best.distance / second : 0.0f;
+    }
+    // At least one gate must be on: with neither a threshold nor a uniqueness bound, nothing is accepted.
+    const bool gated = config_.threshold >= 0.0 || config_.min_uniqueness > 0.0;
+    detection.accepted = gated && (config_.threshold < 0.0 || detection.best.distance <= config_.threshold) &&
+                         detection.uniqueness >= config_.min_uniqueness;
+  }
+  return detection;
+}
+
+void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
+{
+  out.clear();
+  for (uint32_t s = 0; s < map.sessionCount(); ++s)
+  {
+    const PlaceDatabase& frames = map.frames(s);
+    const size_t start = out.size();
+    out.resize(start + frames.size(), std::nanf(""));
+    if (s >= matchers_.size())
+      continue;
+    const SequenceMatcher& matcher = matchers_[s];
+    for (size_t c = 0; c < matcher.columns(); ++c)
+    {
+      const uint64_t id = matcher.firstId() + c;
+      if (id < frames.firstId())
+        continue;  // evicted after matching
+      const size_t position = static_cast<size_t>(id - frames.firstId());
+      if (position < frames.size())
+        out[start + position] = matcher.normalized(c, nullptr, minTerms());
+    }
+  }
+}
+
+void MapMatcher::setConfig(const Config& config)
+{
+  for (SequenceMatcher& matcher : matchers_)
+  {
+    if (config.sequence_length != config_.sequence_length)
+      matcher.setSequenceLength(config.sequence_length);
+    if (config.bidirectional != config_.bidirectional)
+      matcher.setBidirectional(config.bidirectional);
+  }
+  config_ = config;
+}
+
+void MapMatcher::reset()
+{
+  for (SequenceMatcher& matcher : matchers_)
+    matcher.reset();
+}
+
+}  // namespace openable

@@ -1,0 +1,304 @@
+// Issue 12: a map of several sessions, continued as a new session, merged, saved and loaded.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "openable/error.h"
+#include "openable/frame_describer.h"
+#include "openable/loop_detector.h"
+#include "openable/session_map.h"
+#include "test_util.h"
+
+using namespace openable;
+
+namespace
+{
+constexpr size_t kWords = 22;  // LDB on a 64-pixel patch
+
+Config ldbConfig()
+{
+  Config c;
+  c.descriptor = "LDB";
+  c.patch_size = 64;
+  c.sequence_length = 5;
+  c.exclusion_window = 10;
+  c.min_uniqueness = 0.1;
+  return c;
+}
+
+DescriptorLayout layoutOf(const Config& c)
+{
+  return FrameDescriber(c).layout();
+}
+
+/// Random places, one per frame.
+std::vector<FrameDescriptor> route(std::mt19937_64& rng, int frames)
+{
+  std::vector<FrameDescriptor> out;
+  for (int i = 0; i < frames; ++i)
+    out.push_back(openable_test::randomWords(rng, layoutOf(ldbConfig()).frameWords()));
+  return out;
+}
+
+/// The same places seen again with a few bits of noise.
+FrameDescriptor revisit(const FrameDescriptor& place, std::mt19937_64& rng)
+{
+  FrameDescriptor d = place;
+  d[0] ^= rng() & 0xF;
+  return d;
+}
+
+std::string tempPath(const std::string& name)
+{
+  return testing::TempDir() + "/sessions_" + name;
+}
+
+std::string errorOf(const std::function<void()>& f)
+{
+  try
+  {
+    f();
+  }
+  catch (const Error& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+
+/// Every detection of `frames` through `detector`, as (session, id, distance) of the best match.
+std::vector<std::tuple<uint32_t, uint64_t, float>> bestMatches(LoopDetector& detector,
+                                                               const std::vector<FrameDescriptor>& frames)
+{
+  std::vector<std::tuple<uint32_t, uint64_t, float>> out;
+  for (const auto& f : frames)
+  {
+    const Detection d = detector.process(f);
+    out.emplace_back(d.best.session, d.has_candidates ? d.best.id : UINT64_MAX, d.best.distance);
+  }
+  return out;
+}
+}  // namespace
+
+TEST(SessionMap, SessionsHaveUniqueNamesAndIdsThatContinue)
+{
+  const Config c = ldbConfig();
+  SessionMap map(layoutOf(c), c.toYaml());
+  std::mt19937_64 rng(1);
+  const uint32_t a = map.addSession({"day", "robot1", 0.0});
+  for (int i = 0; i < 5; ++i)
+  {
+    FrameInfo info;
+    info.stamp = 100.0 + i;
+    EXPECT_EQ(map.add(a, openable_test::randomWords(rng, kWords), info), uint64_t(i));
+  }
+  EXPECT_EQ(map.session(a).start_stamp, 100.0);
+  const uint32_t b = map.addSession({"night", "robot1", 0.0});
+  EXPECT_EQ(map.add(b, openable_test::randomWords(rng, kWords)), 5u);  // ids go on after the first session
+  EXPECT_EQ(map.frames(b).info(0).session, b);
+  EXPECT_EQ(map.frameCount(), 6u);
+  EXPECT_EQ(map.findSession("night"), 1);
+  EXPECT_EQ(map.findSession("dusk"), -1);
+  EXPECT_NE(errorOf([&] { map.addSession({"day", "", 0.0}); }).find("'day' is already in the map"), std::string::npos);
+  EXPECT_NE(errorOf([&] { map.addSession({"", "", 0.0}); }).find("needs a name"), std::string::npos);
+  EXPECT_EQ(map.sessionCount(), 2u);  // nothing added by the refusals
+}
+
+TEST(SessionMap, SavedAndLoadedWithEverySessionAndFrame)
+{
+  const Config c = ldbConfig();
+  SessionMap map(layoutOf(c), c.toYaml());
+  std::mt19937_64 rng(2);
+  for (const char* name : {"first", "second", "third"})
+  {
+    const uint32_t s = map.addSession({name, std::string("robot_") + name, 0.0});
+    for (int i = 0; i < 4 + static_cast<int>(s); ++i)
+    {
+      FrameInfo info;
+      info.stamp = 10.0 * s + i;
+      info.source = std::string(name) + std::to_string(i);
+      info.has_pose = i % 2 == 0;
+      info.pose[0] = i;
+      map.add(s, openable_test::randomWords(rng, kWords), info);
+    }
+  }
+  const std::string path = tempPath("three.map");
+  map.save(path);
+  const SessionMap back = SessionMap::load(path);
+  ASSERT_EQ(back.sessionCount(), 3u);
+  EXPECT_EQ(back.configYaml(), map.configYaml());
+  for (uint32_t s = 0; s < 3; ++s)
+  {
+    EXPECT_EQ(back.session(s).name, map.session(s).name);
+    EXPECT_EQ(back.session(s).robot, map.session(s).robot);
+    EXPECT_EQ(back.session(s).start_stamp, map.session(s).start_stamp);
+    ASSERT_EQ(back.frames(s).size(), map.frames(s).size());
+    EXPECT_EQ(back.frames(s).firstId(), map.frames(s).firstId());
+    for (size_t i = 0; i < map.frames(s).size(); ++i)
+    {
+      const FrameInfo x = map.frames(s).info(i), y = back.frames(s).info(i);
+      EXPECT_EQ(y.id, x.id);
+      EXPECT_EQ(y.session, s);
+      EXPECT_EQ(y.source, x.source);
+      EXPECT_EQ(y.has_pose, x.has_pose);
+      EXPECT_EQ(y.pose, x.pose);
+      EXPECT_EQ(std::vector<uint64_t>(back.frames(s).descriptor(i), back.frames(s).descriptor(i) + kWords),
+                std::vector<uint64_t>(map.frames(s).descriptor(i), map.frames(s).descriptor(i) + kWords));
+    }
+  }
+  // A map of several sessions is not one database.
+  EXPECT_NE(errorOf([&] { PlaceDatabase::load(path); }).find("holds 3 sessions"), std::string::npos);
+}
+
+TEST(SessionMap, MergeRenumbersAndRefusesOtherConfigurationsAndRepeatedNames)
+{
+  const Config c = ldbConfig();
+  std::mt19937_64 rng(3);
+  SessionMap a(layoutOf(c), c.toYaml()), b(layoutOf(c), c.toYaml());
+  a.addSession({"day", "", 0.0});
+  b.addSession({"night", "", 0.0});
+  for (int i = 0; i < 7; ++i)
+    a.add(0, openable_test::randomWords(rng, kWords));
+  for (int i = 0; i < 3; ++i)
+    b.add(0, openable_test::randomWords(rng, kWords));
+  const SessionMap merged = SessionMap::merge(a, b);
+  ASSERT_EQ(merged.sessionCount(), 2u);
+  EXPECT_EQ(merged.frames(1).firstId(), 7u);  // as if night had been recorded after day
+  EXPECT_EQ(merged.frames(1).info(2).session, 1u);
+  EXPECT_EQ(merged.frames(1).descriptor(2)[1], b.frames(0).descriptor(2)[1]);
+
+  EXPECT_NE(errorOf([&] { SessionMap::merge(a, a); }).find("session name 'day' is in both maps"), std::string::npos);
+  Config other = c;
+  other.patch_size = 32;
+  SessionMap small(layoutOf(other), other.toYaml());
+  const std::string refusal = errorOf([&] { SessionMap::merge(a, small); });
+  EXPECT_NE(refusal.find("different configurations: patch_size '64' (other '32')"), std::string::npos) << refusal;
+}
+
+TEST(LoopDetector, ContinuedSessionFindsLoopsWithTheMapAndWithinItself)
+{
+  const Config c = ldbConfig();
+  std::mt19937_64 rng(4);
+  const std::vector<FrameDescriptor> day = route(rng, 60);
+
+  LoopDetector recording(c, SessionInfo{"day", "", 0.0});
+  for (const auto& f : day)
+    recording.process(f);
+  const std::string path = tempPath("day.map");
+  recording.map().save(path);
+
+  // Night: day's places 10..39, then new places, then its own frames 60..79 of the night again.
+  std::vector<FrameDescriptor> night;
+  for (int i = 10; i < 40; ++i)
+    night.push_back(revisit(day[i], rng));
+  const std::vector<FrameDescriptor> fresh = route(rng, 30);
+  night.insert(night.end(), fresh.begin(), fresh.end());
+  for (int i = 0; i < 20; ++i)
+    night.push_back(revisit(fresh[i], rng));
+
+  LoopDetector detector(c, SessionMap::load(path), MapMode::Continue, SessionInfo{"night", "", 0.0});
+  EXPECT_EQ(detector.ownSession(), 1);
+  int with_day = 0, within_night = 0;
+  for (size_t t = 0; t < night.size(); ++t)
+  {
+    const Detection d = detector.process(night[t]);
+    EXPECT_EQ(d.query_id, 60 + t);  // the new session's ids follow the map's
+    if (t >= 4 && t < 30)  // full sequences on day's route
+    {
+      ASSERT_TRUE(d.has_candidates) << t;
+      EXPECT_EQ(d.best.session, 0u) << t;
+      EXPECT_EQ(d.best.id, 10 + t) << t;
+      with_day += d.accepted;
+    }
+    if (t >= 64)  // full sequences on the night's own earlier frames
+    {
+      EXPECT_EQ(d.best.session, 1u) << t;
+      EXPECT_EQ(d.best.id, 60 + 30 + (t - 60)) << t;
+      within_night += d.accepted;
+    }
+    // A sequence never spans two sessions: no match has more terms than its session had frames before it.
+    if (d.has_candidates && d.best.session == 1)
+    {
+      EXPECT_LE(d.best.id - 60 + 1, t);
+    }
+  }
+  EXPECT_GE(with_day, 24);
+  EXPECT_GE(within_night, 14);
+  EXPECT_EQ(detector.map().sessionCount(), 2u);
+  EXPECT_EQ(detector.map().frames(0).size(), 60u);  // the loaded session is not touched
+  EXPECT_EQ(detector.map().frames(1).size(), night.size());
+
+  // Localising against the same map stores nothing and finds day's places.
+  LoopDetector localiser(c, SessionMap::load(path), MapMode::Localise);
+  EXPECT_TRUE(localiser.localisationMode());
+  for (int i = 0; i < 10; ++i)
+    localiser.process(night[static_cast<size_t>(i)]);
+  EXPECT_EQ(localiser.map().frameCount(), 60u);
+
+  EXPECT_NE(errorOf([&] { LoopDetector(c, SessionMap::load(path), MapMode::Continue, SessionInfo{"day", "", 0.0}); })
+                .find("'day' is already in the map"),
+            std::string::npos);
+}
+
+TEST(LoopDetector, SequencesDoNotRunAcrossTheEndOfOneSessionIntoTheNext)
+{
+  // Session two starts where session one ended: the map's frame after "one"'s last is "two"'s first, but a
+  // query that retraces one's last frames then two's first must not find a sequence spanning both.
+  Config c = ldbConfig();
+  c.exclusion_window = 0;
+  std::mt19937_64 rng(5);
+  const std::vector<FrameDescriptor> one = route(rng, 20), two = route(rng, 20);
+  SessionMap map(layoutOf(c), c.toYaml());
+  for (const auto& [name, frames] : {std::make_pair("one", &one), std::make_pair("two", &two)})
+  {
+    const uint32_t s = map.addSession({name, "", 0.0});
+    for (const auto& f : *frames)
+      map.add(s, f);
+  }
+  // Continued (loop-closure rules: full sequences of L only; localising would accept partial ones).
+  LoopDetector detector(c, map, MapMode::Continue, SessionInfo{"three", "", 0.0});
+  for (int i = 15; i < 20; ++i)
+    detector.process(revisit(one[static_cast<size_t>(i)], rng));
+  for (int i = 0; i < 3; ++i)
+  {
+    const Detection d = detector.process(revisit(two[static_cast<size_t>(i)], rng));
+    ASSERT_TRUE(d.has_candidates);
+    // Stored as one run, one[15+i..19] + two[0..i] would be a perfect full sequence ending at two[i]. Kept
+    // apart, two has only i + 1 frames of that chain (fewer than L = 5): no near-perfect match exists.
+    EXPECT_FALSE(d.best.session == 1 && d.best.id == 20u + static_cast<uint64_t>(i)) << i;
+    EXPECT_GT(d.best.distance, 0.2f) << i;
+  }
+}
+
+TEST(LoopDetector, MergeThenContinueEqualsOneContinuedRun)
+{
+  const Config c = ldbConfig();
+  std::mt19937_64 rng(6);
+  const std::vector<FrameDescriptor> day = route(rng, 40);
+  std::vector<FrameDescriptor> night, dusk;
+  for (int i = 0; i < 40; ++i)
+    night.push_back(revisit(day[static_cast<size_t>(i)], rng));
+  for (int i = 5; i < 35; ++i)
+    dusk.push_back(revisit(day[static_cast<size_t>(i)], rng));
+
+  // One run: day, then night continued into it, then dusk.
+  LoopDetector day_run(c, SessionInfo{"day", "", 0.0});
+  bestMatches(day_run, day);
+  LoopDetector night_run(c, day_run.map(), MapMode::Continue, SessionInfo{"night", "", 0.0});
+  bestMatches(night_run, night);
+  LoopDetector dusk_after_one(c, night_run.map(), MapMode::Continue, SessionInfo{"dusk", "", 0.0});
+  const auto one = bestMatches(dusk_after_one, dusk);
+
+  // Two maps recorded apart, merged, then dusk.
+  LoopDetector night_alone(c, SessionInfo{"night", "", 0.0});
+  bestMatches(night_alone, night);
+  LoopDetector dusk_after_merge(c, SessionMap::merge(day_run.map(), night_alone.map()), MapMode::Continue,
+                                SessionInfo{"dusk", "", 0.0});
+  const auto merged = bestMatches(dusk_after_merge, dusk);
+  EXPECT_EQ(merged, one);
+  size_t found = 0;
+  for (const auto& [session, id, distance] : one)
+    found += id != UINT64_MAX && distance < 0.05f;
+  EXPECT_GE(found, 20u);  // and they are real loops, not two identical failures
+}
