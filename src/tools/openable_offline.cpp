@@ -2,7 +2,7 @@
 //
 //   openable_offline --config FILE.yaml --reference PATH [--query PATH] --output DIR [--set key=value]...
 //                    [--reference-right PATH] [--query-right PATH] [--ground-truth-tolerance T]
-//                    [--camera-info FILE [--verify-optional]]
+//                    [--camera-info FILE [--verify-optional]] [--map-in FILE] [--map-out FILE] [--session NAME]
 //
 // With --reference only, the stream is matched against its own past (loop-closure mode); with --query,
 // every query frame is matched against the reference traversal (localisation mode). See --help.
@@ -23,13 +23,16 @@
 #include "openable/atomic_file.h"
 #include "openable/camera_calibration.h"
 #include "openable/config.h"
+#include "openable/frame_describer.h"
 #include "openable/error.h"
 #include "openable/image_source.h"
 #include "openable/npy.h"
 #include "openable/online_detector.h"
 #include "openable/progress.h"
 #include "openable/render.h"
+#include "openable/reference_map.h"
 #include "openable/staged_output.h"
+#include "offline_frame_numbers.h"
 
 namespace fs = std::filesystem;
 using openable::Error;
@@ -41,6 +44,7 @@ const char* kUsage =
     "                        [--set key=value]... [--reference-right PATH] [--query-right PATH]\n"
     "                        [--ground-truth-tolerance T] [--quiet]\n"
     "                        [--camera-info FILE [--verify-optional]]\n"
+    "                        [--map-in FILE] [--map-out FILE] [--session NAME]\n"
     "\n"
     "PATH is a folder of images (in name order, numbers compared as numbers: image2 before image10) or a\n"
     "video file.\n"
@@ -56,8 +60,15 @@ const char* kUsage =
     "                     stereo baseline). Loops that fail are failed_verification, unverifiable ones\n"
     "                     unverified; neither is published. Loop-closure mode only (a map keeps no features).\n"
     "  --verify-optional  : unverifiable loops go out without a pose (~verify_required false)\n"
+    "  --map-in FILE    : continue a saved map: the stream becomes a new session, matched against every\n"
+    "                     session of the map and its own past (loop-closure mode only). Frame numbers in the\n"
+    "                     outputs then count from the map's next id, as if the stream followed the map.\n"
+    "  --map-out FILE   : save the map (every session, the stream's included; in localisation mode the\n"
+    "                     reference) after a successful run\n"
+    "  --session NAME   : the stream's session name in the map (default: the stream's file or folder name)\n"
     "Writes into DIR: distance_matrix.npy, distance_matrix.png, distance_matrix_thresholded.png (with a\n"
-    "threshold), loop_closures.csv (published loop closures), decisions.csv (every frame), timings.json.\n";
+    "threshold), loop_closures.csv (published loop closures, with query_session,match_session), decisions.csv\n"
+    "(every frame), timings.json.\n";
 
 struct Options
 {
@@ -68,7 +79,23 @@ struct Options
   bool quiet = false;
   std::string camera_info;  // non-empty: verify, as a nodelet with ~verify and this camera_info
   bool verify_optional = false;
+  std::string map_in, map_out, session;
 };
+
+openable::SessionInfo sessionNamed(const std::string& name)
+{
+  return openable::SessionInfo{name, "", 0.0};
+}
+
+/// The default session name: the stream's file or folder name.
+std::string nameOfPath(const std::string& path)
+{
+  fs::path p = fs::path(path).lexically_normal();
+  if (p.filename().empty())
+    p = p.parent_path();
+  const std::string name = p.filename().string();
+  return name.empty() || name == "." || name == ".." ? "stream" : name;
+}
 
 Options parseArguments(int argc, char** argv)
 {
@@ -110,6 +137,12 @@ Options parseArguments(int argc, char** argv)
       o.sets.push_back(value);
     else if (arg == "--camera-info")
       o.camera_info = value;
+    else if (arg == "--map-in")
+      o.map_in = value;
+    else if (arg == "--map-out")
+      o.map_out = value;
+    else if (arg == "--session")
+      o.session = value;
     else if (arg == "--ground-truth-tolerance")
     {
       size_t used = 0;
@@ -137,6 +170,11 @@ Options parseArguments(int argc, char** argv)
     throw Error(
         "--camera-info verifies loop closures within one stream; with --query the reference map keeps no features "
         "to verify against (drop --query or --camera-info)");
+  if (!o.map_in.empty() && !o.query.empty())
+    throw Error("--map-in continues a map with one stream; with --query the reference traversal is the map "
+                "(drop --query or --map-in)");
+  if (o.session.empty())
+    o.session = nameOfPath(o.reference);
   return o;
 }
 
@@ -289,14 +327,16 @@ int run(const Options& options)
                 << (online.verify_required ? ", required)\n" : ", optional)\n");
   }
 
-  // Localisation: describe the reference traversal into a map first.
+  // Localisation: describe the reference traversal into a map first. Loop closure: a new map, or a saved
+  // one continued (--map-in), with the stream as its newest session.
   std::unique_ptr<openable::OnlineDetector> detector;
-  std::vector<long> reference_file_of;  // database position -> file index of the reference
   long reference_files = 0;
+  std::unique_ptr<FrameNumbers> numbers;
   if (localisation)
   {
     const openable::OnlineDetector describer(config);
     openable::PlaceDatabase map(describer.describer().layout(), 0, config.toYaml());
+    numbers = std::make_unique<FrameNumbers>(0);
     TraversalReader reference(options.reference, options.reference_right, options.quiet);
     openable::Progress progress("openable_offline: reference", reference.size(), options.quiet);
     openable::FrameInput input;
@@ -309,7 +349,7 @@ int run(const Options& options)
                  openable::FrameInfo info;
                  info.source = input.source;
                  map.add(describer.describe(input), info);
-                 reference_file_of.push_back(reference_files);
+                 numbers->stored(reference_files);
                });
       timings.describe += msSince(start);
       progress.step();
@@ -318,23 +358,38 @@ int run(const Options& options)
     if (map.empty())
       throw Error("no reference frame could be described in '" + options.reference + "'");
     timings.frames += map.size();
-    detector = std::make_unique<openable::OnlineDetector>(config, std::move(map));
+    detector = std::make_unique<openable::OnlineDetector>(
+        config, openable::SessionMap(std::move(map), sessionNamed(nameOfPath(options.reference))), openable::MapMode::Localise,
+        openable::SessionInfo(), online);
   }
   else
-    detector = std::make_unique<openable::OnlineDetector>(config, online);
+  {
+    openable::SessionMap map = options.map_in.empty()
+                                   ? openable::SessionMap(openable::FrameDescriber(config).layout(), config.toYaml())
+                                   : openable::loadReferenceMap(options.map_in, config);
+    if (!options.map_in.empty() && !options.quiet)
+      std::cerr << "continuing " << options.map_in << ": " << map.sessionCount() << " sessions, " << map.frameCount()
+                << " frames; this stream is session '" << options.session << "'\n";
+    numbers = std::make_unique<FrameNumbers>(map.nextId());
+    detector = std::make_unique<openable::OnlineDetector>(config, std::move(map), openable::MapMode::Continue,
+                                                          sessionNamed(options.session), online);
+  }
   if (online.verify)
     detector->setCamera(camera);
+  const openable::SessionMap& map = detector->loopDetector().map();
+  const uint32_t own = localisation ? 0 : static_cast<uint32_t>(detector->loopDetector().ownSession());
+  const long first_column = numbers->query(0);
 
   // The stream: every frame through the online pipeline, as a nodelet would see it.
   TraversalReader stream(localisation ? options.query : options.reference,
                          localisation ? options.query_right : options.reference_right, options.quiet);
   openable::Progress progress(localisation ? "openable_offline: query" : "openable_offline", stream.size(),
                               options.quiet);
-  std::vector<std::vector<float>> rows;  // per stream file: distances by reference file (empty = not described)
-  std::vector<long> stream_file_of;      // loop-closure mode: database position -> file index
+  std::vector<std::vector<float>> rows;  // per stream file: distances by frame number (empty = not described)
   const bool panoramic = config.camera_type == "panoramic";
   std::ostringstream loops, decisions;
-  loops << "query,match,distance,score,status" << (panoramic ? ",direction,shift" : "") << "\n";
+  loops << "query,match,distance,score,status" << (panoramic ? ",direction,shift" : "")
+        << ",query_session,match_session\n";
   decisions << "query,match,distance,score,status,accepted\n";
   std::map<std::string, size_t> status_counts;
   size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;
@@ -352,40 +407,38 @@ int run(const Options& options)
     timings.match += outcome.times.match_ms + outcome.times.verify_ms;
     ++timings.frames;
     if (!localisation && outcome.stored)
-      stream_file_of.push_back(file);
-    const std::vector<long>& file_of = localisation ? reference_file_of : stream_file_of;
+      numbers->stored(file);
+    const long query = localisation ? file : numbers->query(file);
     detector->loopDetector().lastRow(row);
-    rows.back().assign(static_cast<size_t>(localisation ? reference_files : file + 1), std::nanf(""));
-    for (size_t p = 0; p < row.size() && p < file_of.size(); ++p)
-      rows.back()[static_cast<size_t>(file_of[p])] = row[p];
+    numbers->toNumbers(map, own, row, static_cast<size_t>(localisation ? reference_files : query + 1), rows.back());
 
     ++status_counts[openable::toString(outcome.status)];
     const openable::Detection& d = outcome.detection;
-    const long match = d.has_candidates ? file_of[d.best.position] : -1;
-    decisions << file << "," << match << "," << formatFloat(d.has_candidates ? d.best.distance : NAN) << ","
+    const long match = d.has_candidates ? numbers->stored(map, d.best.session, d.best.position, own) : -1;
+    decisions << query << "," << match << "," << formatFloat(d.has_candidates ? d.best.distance : NAN) << ","
               << formatFloat(d.has_candidates ? outcome.score : NAN) << "," << openable::toString(outcome.status) << ","
               << (outcome.published() ? 1 : 0) << "\n";
     if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;
-      truth_hits += std::labs(match - file) <= options.ground_truth_tolerance ? 1 : 0;
+      truth_hits += std::labs(match - query) <= options.ground_truth_tolerance ? 1 : 0;
     }
     if (!outcome.published())
       continue;
     ++published;
-    published_correct += std::labs(match - file) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
-    loops << file << "," << match << "," << formatFloat(d.best.distance) << "," << formatFloat(outcome.score)
+    published_correct += std::labs(match - query) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
+    loops << query << "," << match << "," << formatFloat(d.best.distance) << "," << formatFloat(outcome.score)
           << ",published";
     if (panoramic)
       loops << "," << int(d.best.direction) << "," << d.best.shift;
-    loops << "\n";
+    loops << "," << (localisation ? map.sessionCount() : own) << "," << d.best.session << "\n";
   }
   progress.finish();
   if (timings.frames == 0)
     throw Error("no frame of '" + (localisation ? options.query : options.reference) + "' could be described");
 
   // Frames are counted as decoded: the matrix is as wide as the reference really was.
-  const long columns = localisation ? reference_files : static_cast<long>(rows.size());
+  const long columns = localisation ? reference_files : first_column + static_cast<long>(rows.size());
   cv::Mat matrix(static_cast<int>(rows.size()), static_cast<int>(columns), CV_32F, cv::Scalar(std::nanf("")));
   for (size_t r = 0; r < rows.size(); ++r)
     std::copy(rows[r].begin(), rows[r].end(), matrix.ptr<float>(static_cast<int>(r)));
@@ -411,6 +464,13 @@ int run(const Options& options)
        << ",\n  \"database_bytes\": " << detector->loopDetector().map().bytes() << "\n}\n";
   openable::writeFileAtomically(output.path("timings.json"), json.str());
   output.publish();
+  if (!options.map_out.empty())
+  {
+    map.save(options.map_out);
+    if (!options.quiet)
+      std::cerr << "saved the map (" << map.sessionCount() << " sessions, " << map.frameCount() << " frames) to "
+                << options.map_out << "\n";
+  }
 
   std::cout << "mode: " << (localisation ? "localisation (query vs reference)" : "loop closure (stream vs its past)")
             << "\n"
