@@ -98,4 +98,9 @@ private:
 /// "key 'a' (<b_name> 'b'), ..."; empty when maps described with them can be compared.
 std::string descriptorDifferences(const Config& a, const Config& b, const std::string& b_name = "other");
 
+/// A 64-bit fingerprint of the descriptor keys' values (FNV-1a of "key=value\n" in Config::descriptorKeys()
+/// order): equal for configurations whose descriptors can be compared, the same on every machine. Sent
+/// with descriptors over a network, so a receiver can refuse ones described otherwise.
+uint64_t descriptorHash(const Config& config);
+
 }  // namespace openable

@@ -302,3 +302,15 @@ TEST(LoopDetector, MergeThenContinueEqualsOneContinuedRun)
     found += id != UINT64_MAX && distance < 0.05f;
   EXPECT_GE(found, 20u);  // and they are real loops, not two identical failures
 }
+
+TEST(SessionMap, DescriptorHashFollowsOnlyTheDescriptorKeys)
+{
+  const Config c = ldbConfig();
+  Config live = c;
+  live.threshold = 0.3;  // a matching key: the descriptors stay comparable
+  Config other = c;
+  other.patch_size = 32;
+  EXPECT_EQ(descriptorHash(live), descriptorHash(c));
+  EXPECT_NE(descriptorHash(other), descriptorHash(c));
+  EXPECT_EQ(descriptorHash(c), descriptorHash(Config::fromYamlString(c.toYaml())));
+}

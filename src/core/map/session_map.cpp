@@ -117,6 +117,18 @@ std::string descriptorDifferences(const Config& a, const Config& b, const std::s
   return differences;
 }
 
+uint64_t descriptorHash(const Config& config)
+{
+  uint64_t hash = 0xcbf29ce484222325ULL;
+  for (const auto& key : Config::descriptorKeys())
+    for (char c : key + "=" + config.get(key) + "\n")
+    {
+      hash ^= static_cast<uint8_t>(c);
+      hash *= 0x100000001b3ULL;
+    }
+  return hash;
+}
+
 SessionMap SessionMap::merge(SessionMap into, const SessionMap& from)
 {
   if (into.config_yaml_ != from.config_yaml_)
