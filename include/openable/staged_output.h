@@ -8,7 +8,8 @@ namespace openable
 {
 /// A set of output files published together: each is written into a hidden folder inside `dir` and moved
 /// into `dir` only by publish(), so a failed run leaves no partial set behind (and an earlier run's files
-/// stay as they were). The hidden folder is removed on destruction.
+/// stay as they were). The hidden folder is removed on destruction, and so is `dir` when this created it
+/// and nothing was published.
 class StagedOutput
 {
 public:
@@ -27,6 +28,8 @@ public:
 private:
   std::filesystem::path dir_, staging_;
   std::vector<std::string> names_;
+  bool created_ = false;
+  bool published_ = false;
 };
 
 }  // namespace openable

@@ -11,6 +11,7 @@ namespace openable
 StagedOutput::StagedOutput(const std::string& dir) : dir_(dir)
 {
   std::error_code ec;
+  created_ = !fs::exists(dir_, ec);
   fs::create_directories(dir_, ec);
   if (!fs::is_directory(dir_))
     throw Error("cannot create output folder '" + dir + "'");
@@ -24,6 +25,8 @@ StagedOutput::~StagedOutput()
 {
   std::error_code ec;
   fs::remove_all(staging_, ec);
+  if (created_ && !published_)
+    fs::remove(dir_, ec);  // only when empty: a folder this run created and never filled
 }
 
 std::string StagedOutput::path(const std::string& name)
@@ -34,6 +37,7 @@ std::string StagedOutput::path(const std::string& name)
 
 void StagedOutput::publish()
 {
+  published_ = true;
   for (const auto& name : names_)
     fs::rename(staging_ / name, dir_ / name);
 }

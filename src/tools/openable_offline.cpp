@@ -463,14 +463,14 @@ int run(const Options& options)
        << "  \"descriptor_bytes\": " << sizeof(uint64_t) * detector->loopDetector().map().layout().frameWords()
        << ",\n  \"database_bytes\": " << detector->loopDetector().map().bytes() << "\n}\n";
   openable::writeFileAtomically(output.path("timings.json"), json.str());
-  output.publish();
-  if (!options.map_out.empty())
+  if (!options.map_out.empty())  // before the outputs: a map that cannot be written fails the whole run
   {
     map.save(options.map_out);
     if (!options.quiet)
       std::cerr << "saved the map (" << map.sessionCount() << " sessions, " << map.frameCount() << " frames) to "
                 << options.map_out << "\n";
   }
+  output.publish();
 
   std::cout << "mode: " << (localisation ? "localisation (query vs reference)" : "loop closure (stream vs its past)")
             << "\n"
