@@ -76,12 +76,19 @@ private:
   bool acceptStamp(const std_msgs::Header& header, const std::string& topic, openable::FrameOutcome& outcome,
                    openable::FrameInput& input);
   void resetLocked();
+  /// A detector with an empty map whose one session is this run's (sessionName(), ~robot).
+  std::unique_ptr<openable::OnlineDetector> freshDetector(const openable::Config& config) const;
+  /// ~session_name, or "<node name> <start time>" when it is empty.
+  std::string sessionName() const;
+  /// Gives `next` the camera the current detector verifies with (a reset or a map keeps it).
+  void keepCamera(openable::OnlineDetector& next) const;
   void warnThrottled(const std::string& key, double period, const std::string& message);
 
   std::mutex mutex_;
   ros::NodeHandle nh_, pnh_;
   std::string name_;
   RosParameters parameters_;
+  std::string session_default_;
   openable::OnlineOptions options_;
   std::unique_ptr<openable::OnlineDetector> detector_;
   std::unique_ptr<PoseLookup> poses_;

@@ -24,6 +24,9 @@ struct RosParameters
   bool reset_on_time_jump = false;
   int session = 0;
   std::string map_file;
+  std::string map_mode = "localise";  ///< what a loaded map is for: localise | continue
+  std::string session_name;           ///< the new session's name when continuing a map (empty: a default)
+  std::string robot;                  ///< stored with the new session
   // tf, keyframes, markers.
   std::string fixed_frame;
   double tf_timeout = 0.05;

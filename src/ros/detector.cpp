@@ -1,8 +1,10 @@
 #include "openable_ros/detector.h"
 
+#include <ctime>
 #include <fstream>
 
 #include "openable/error.h"
+#include "openable/frame_describer.h"
 #include "openable/reference_map.h"
 #include "openable_ros/conversions.h"
 #include "openable_ros/live_reconfigure.h"
@@ -37,8 +39,25 @@ geometry_msgs::Point position(const std::array<double, 7>& pose)
 }  // namespace
 
 Detector::Detector(ros::NodeHandle nh, ros::NodeHandle pnh, std::string name, RosParameters parameters)
-  : nh_(nh), pnh_(pnh), name_(std::move(name)), parameters_(std::move(parameters)), options_(onlineOptions(parameters_))
+  : nh_(nh),
+    pnh_(pnh),
+    name_(std::move(name)),
+    parameters_(std::move(parameters)),
+    options_(onlineOptions(parameters_))
 {
+  // The default session name: the node and the wall time it started, unique across restarts.
+  char started[32];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(started, sizeof(started), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+  session_default_ = name_ + " " + started;
+}
+
+std::unique_ptr<openable::OnlineDetector> Detector::freshDetector(const openable::Config& config) const
+{
+  openable::SessionMap empty(openable::FrameDescriber(config).layout(), config.toYaml());
+  return std::make_unique<openable::OnlineDetector>(config, std::move(empty), openable::MapMode::Continue,
+                                                    openable::SessionInfo{sessionName(), parameters_.robot, 0.0},
+                                                    options_);
 }
 
 Detector::~Detector()
@@ -60,7 +79,7 @@ std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle p
   std::unique_ptr<Detector> d(new Detector(nh, pnh, name, parameters));
   try
   {
-    d->detector_ = std::make_unique<openable::OnlineDetector>(config, d->options_);
+    d->detector_ = d->freshDetector(config);
   }
   catch (const std::exception& e)
   {
@@ -324,9 +343,16 @@ bool Detector::loadMap(const std::string& path, std::string& message, uint32_t& 
   {
     auto map = openable::loadReferenceMap(path, detector_->config());
     frames = uint32_t(map.frameCount());
-    detector_ = std::make_unique<openable::OnlineDetector>(detector_->config(), std::move(map),
-                                                           openable::MapMode::Localise, openable::SessionInfo(),
-                                                           options_);
+    const size_t sessions = map.sessionCount();
+    const bool continuing = parameters_.map_mode == "continue";
+    auto loaded = std::make_unique<openable::OnlineDetector>(
+        detector_->config(), std::move(map), continuing ? openable::MapMode::Continue : openable::MapMode::Localise,
+        openable::SessionInfo{sessionName(), parameters_.robot, 0.0}, options_);
+    keepCamera(*loaded);
+    detector_ = std::move(loaded);
+    message = "map '" + path + "' loaded: " + std::to_string(sessions) + " sessions, " + std::to_string(frames) +
+              " frames; " +
+              (continuing ? "continuing it as session '" + sessionName() + "'" : std::string("localising against it"));
   }
   catch (const openable::Error& e)
   {
@@ -334,19 +360,33 @@ bool Detector::loadMap(const std::string& path, std::string& message, uint32_t& 
     return false;
   }
   resetLocked();
-  message = "map '" + path + "' loaded: " + std::to_string(frames) + " frames; localising against it";
   return true;
+}
+
+std::string Detector::sessionName() const
+{
+  return parameters_.session_name.empty() ? session_default_ : parameters_.session_name;
+}
+
+void Detector::keepCamera(openable::OnlineDetector& next) const
+{
+  if (detector_ && detector_->verifier())
+    next.setCamera(detector_->verifier()->camera());
 }
 
 std::string Detector::reset()
 {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (detector_->localisationMode())
+  const bool had_map = detector_->localisationMode() || detector_->loopDetector().map().sessionCount() > 1;
+  if (had_map)
   {
-    // Back to loop-closure mode: the map is left, the stream starts afresh (as after a restart).
-    detector_ = std::make_unique<openable::OnlineDetector>(detector_->config(), options_);
+    // Back to a fresh map in loop-closure mode: the loaded map is left, the stream starts afresh (as after
+    // a restart), the camera for verification is kept.
+    auto fresh = freshDetector(detector_->config());
+    keepCamera(*fresh);
+    detector_ = std::move(fresh);
     resetLocked();
-    return "reference map unloaded; loop-closure mode with an empty history";
+    return "map unloaded; loop-closure mode with a fresh map";
   }
   resetLocked();
   return "history cleared";

@@ -202,7 +202,9 @@ TEST(OfflineTool, CameraInfoVerifiesLoopClosuresAsANodeletWould)
   const auto verified = statusByPair(readFile(required + "/loop_closures.csv"));
   const auto decisions = statusByPair(readFile(required + "/decisions.csv"));
   EXPECT_EQ(readFile(optional + "/loop_closures.csv"), readFile(required + "/loop_closures.csv"));
-  EXPECT_EQ(readFile(required + "/loop_closures.csv").rfind("query,match,distance,score,status\n", 0), 0u);
+  EXPECT_EQ(readFile(required + "/loop_closures.csv")
+                .rfind("query,match,distance,score,status,query_session,match_session\n", 0),
+            0u);
   ASSERT_GT(unverified.size(), 10u);
   int failed = 0;
   for (const auto& [pair, status] : unverified)
