@@ -67,7 +67,7 @@ TEST(OfflineTool, DayLeftVsNightRightWritesA200By200Matrix)
   std::ifstream csv(out + "/loop_closures.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header, "query,match,distance,score,status");
+  EXPECT_EQ(header, "query,match,distance,score,status,query_session,match_session");
   // paper.yaml: LDB, 1386 bits in 22 words.
   std::ifstream json(out + "/timings.json");
   const std::string timings((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
