@@ -12,7 +12,7 @@
 #include "openable/frame_describer.h"
 #include "openable/loop_detector.h"
 #include "openable/npy.h"
-#include "openable/place_database.h"
+#include "openable/session_map.h"
 
 namespace openable_fuzz
 {
@@ -66,14 +66,19 @@ std::string withValidChecksum(const uint8_t* data, size_t size)
   return bytes;
 }
 
-/// Uses a loaded map the way the detector would: every stored frame against the first.
-void useMap(const openable::PlaceDatabase& map)
+/// Uses a loaded map the way a detector would: continued as a new session, the first stored frame matched
+/// against every session.
+void useMap(const openable::SessionMap& map)
 {
   const openable::Config config = openable::Config::fromYamlString(map.configYaml());
-  if (map.empty() || !config.validate().empty())
+  if (map.frameCount() == 0 || !config.validate().empty())
     return;
-  openable::LoopDetector detector(config, map);
-  const openable::FrameDescriptor first(map.descriptor(0), map.descriptor(0) + map.layout().frameWords());
+  uint32_t session = 0;
+  while (map.frames(session).empty())
+    ++session;
+  const openable::PlaceDatabase& frames = map.frames(session);
+  const openable::FrameDescriptor first(frames.descriptor(0), frames.descriptor(0) + map.layout().frameWords());
+  openable::LoopDetector detector(config, map, openable::MapMode::Continue, openable::SessionInfo{"fuzz", "", 0.0});
   detector.process(first);
 }
 }  // namespace
@@ -84,7 +89,7 @@ void loadMap(const uint8_t* data, size_t size)
   const TemporaryFile file(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), ".map");
   try
   {
-    useMap(openable::PlaceDatabase::load(file.path()));
+    useMap(openable::SessionMap::load(file.path()));
   }
   catch (const openable::Error&)
   {

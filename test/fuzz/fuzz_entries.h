@@ -10,8 +10,8 @@
 
 namespace openable_fuzz
 {
-/// The bytes as a map file: PlaceDatabase::load, its stored configuration, and a localisation detector
-/// over it when that configuration is valid and matches.
+/// The bytes as a map file: SessionMap::load (every format version), its stored configuration, and the map
+/// continued by a detector when that configuration is valid and matches.
 void loadMap(const uint8_t* data, size_t size);
 /// The bytes as a YAML configuration: Config::fromYamlString, validate() and, when valid, a FrameDescriber.
 void parseConfig(const uint8_t* data, size_t size);
