@@ -3,6 +3,7 @@
 // 2015), image NNN is the same place in every traversal.
 #include <gtest/gtest.h>
 
+#include "openable/answer_collector.h"
 #include "openable/candidate_merger.h"
 #include "openable/frame_describer.h"
 #include "openable/loop_detector.h"
@@ -240,4 +241,48 @@ TEST(PlaceServer, SavesAndLoadsItsMapAndRefusesAnotherConfiguration)
     EXPECT_NE(std::string(e.what()).find("patch_size '64' (the map '128')"), std::string::npos) << e.what();
   }
   EXPECT_EQ(different.map().frameCount(), 0u);
+}
+
+namespace
+{
+ServerCandidates answer(const std::string& server, const std::string& session, uint64_t frame)
+{
+  ServerCandidates a;
+  a.server = server;
+  a.query_session = session;
+  a.query_frame = frame;
+  return a;
+}
+
+std::vector<std::string> released(const std::vector<std::vector<ServerCandidates>>& queries)
+{
+  std::vector<std::string> out;
+  for (const auto& q : queries)
+    out.push_back(q.front().query_session + "#" + std::to_string(q.front().query_frame) + "x" +
+                  std::to_string(q.size()));
+  return out;
+}
+}  // namespace
+
+TEST(AnswerCollector, ReleasesCompleteQueriesInStreamOrderAndWaitsBoundedForAMissingServer)
+{
+  AnswerCollector collector(2, 0.5);
+  using V = std::vector<std::string>;
+  EXPECT_EQ(released(collector.add(answer("a", "r1", 0), 0.0)), V{});
+  EXPECT_EQ(released(collector.add(answer("a", "r2", 0), 0.0)), V{});
+  EXPECT_EQ(released(collector.add(answer("b", "r1", 0), 0.1)), V{"r1#0x2"});
+  // Server a answers r1#1, b never answers r2#0: r1#1 completes; r2#0 waits until the bound.
+  EXPECT_EQ(released(collector.add(answer("a", "r1", 1), 0.2)), V{});
+  EXPECT_EQ(released(collector.add(answer("a", "r1", 1), 0.2)), V{});  // the same server twice counts once
+  EXPECT_EQ(released(collector.add(answer("b", "r1", 1), 0.3)), V{"r1#1x2"});
+  EXPECT_EQ(released(collector.expire(0.4)), V{});
+  EXPECT_EQ(released(collector.expire(0.5)), V{"r2#0x1"});
+  EXPECT_EQ(collector.incomplete(), 1u);
+  EXPECT_EQ(released(collector.add(answer("b", "r2", 0), 0.6)), V{});  // too late: dropped, counted
+  EXPECT_EQ(collector.late(), 1u);
+  // A later query completing first releases the earlier one of its stream before it.
+  EXPECT_EQ(released(collector.add(answer("a", "r2", 1), 0.7)), V{});
+  EXPECT_EQ(released(collector.add(answer("a", "r2", 2), 0.7)), V{});
+  EXPECT_EQ(released(collector.add(answer("b", "r2", 2), 0.8)), (V{"r2#1x1", "r2#2x2"}));
+  EXPECT_EQ(collector.waiting(), 0u);
 }
