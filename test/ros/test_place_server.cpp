@@ -15,6 +15,7 @@
 #include <ros/ros.h>
 #include <xmlrpcpp/XmlRpcClient.h>
 
+#include <fstream>
 #include <mutex>
 #include <sstream>
 
@@ -96,14 +97,43 @@ std::vector<std::string> busInfo(const std::string& node)
   return out;
 }
 
-/// Connections of `node` on `topic` (whose info mentions `address` unless it is empty).
+/// True when a TCP connection to `address`:`port` is established on this machine (/proc/net/tcp): a
+/// node's bus lists a link it is still retrying too, so the kernel has the last word.
+bool established(const std::string& address, int port)
+{
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  if (std::sscanf(address.c_str(), "%u.%u.%u.%u", &a, &b, &c, &d) != 4)
+    return false;
+  char endpoint[32];
+  std::snprintf(endpoint, sizeof(endpoint), "%02X%02X%02X%02X:%04X", d, c, b, a, unsigned(port));
+  std::ifstream tcp("/proc/net/tcp");
+  std::string line;
+  while (std::getline(tcp, line))
+  {
+    std::istringstream words(line);
+    std::string slot, local, remote, state;
+    words >> slot >> local >> remote >> state;
+    if (remote == endpoint && state == "01")
+      return true;
+  }
+  return false;
+}
+
+/// Connections of `node` on `topic`; with an address, only those established to that host (the ROS_IP /
+/// ROS_HOSTNAME the publishing node advertises), from the link's info "... to [host:port on socket n]".
 size_t connections(const std::string& node, const std::string& topic, const std::string& address = "")
 {
   size_t n = 0;
   for (const std::string& line : busInfo(node))
-    if (line.compare(0, topic.size() + 1, topic + " ") == 0 &&
-        (address.empty() || line.find(address + ":") != std::string::npos))
+  {
+    if (line.compare(0, topic.size() + 1, topic + " ") != 0)
+      continue;
+    const size_t at = line.find("to [" + address + ":");
+    if (address.empty())
       ++n;
+    else if (at != std::string::npos)
+      n += established(address, std::atoi(line.c_str() + at + 5 + address.size()));
+  }
   return n;
 }
 
