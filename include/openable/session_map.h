@@ -45,6 +45,9 @@ public:
   /// Adds an empty session. capacity 0 = unbounded (else the oldest frames of this session leave first).
   /// Throws Error when the name is empty or already in the map. Returns the session's index.
   uint32_t addSession(SessionInfo info, size_t capacity = 0);
+  /// The same, with the session's ids starting at `first_id` instead of nextId(): a PlaceServer numbers
+  /// each robot's frames from 0, so that servers holding different sessions name a frame alike.
+  uint32_t addSession(SessionInfo info, size_t capacity, uint64_t first_id);
   /// Index of the session called `name`, or -1.
   int findSession(const std::string& name) const;
   size_t sessionCount() const

@@ -23,6 +23,7 @@ namespace openable_ros
 {
 class MapServices;
 class LiveReconfigure;
+class DescriptorPublisher;
 
 /// What the three detector nodelets share, by composition: the core OnlineDetector (the pipeline
 /// openable_offline runs too) and the ROS pieces around it — pose lookup (tf), loop_closures / decisions,
@@ -101,6 +102,7 @@ private:
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::Timer diagnostics_timer_;
   std::unique_ptr<MapServices> services_;
+  std::unique_ptr<DescriptorPublisher> descriptors_;  ///< place_descriptors, with ~publish_descriptors
   std::unique_ptr<LiveReconfigure> reconfigure_;
   std::unique_ptr<openable::SyncWatch> sync_;
   ros::WallTimer sync_timer_;

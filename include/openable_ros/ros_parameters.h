@@ -42,6 +42,9 @@ struct RosParameters
   bool verify = false;
   bool verify_required = true;
   double verify_memory = 256.0;
+  // Multi-robot (PlaceServer).
+  bool publish_descriptors = false;
+  std::string robot;
 };
 
 /// One row of the table.

@@ -7,6 +7,7 @@
 #include "openable/frame_describer.h"
 #include "openable/reference_map.h"
 #include "openable_ros/conversions.h"
+#include "openable_ros/descriptor_publisher.h"
 #include "openable_ros/live_reconfigure.h"
 #include "openable_ros/map_services.h"
 #include "openable_ros/params.h"
@@ -106,6 +107,8 @@ std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle p
   d->loop_pub_ = nh.advertise<LoopClosure>("loop_closures", 100);
   d->decisions_pub_ = nh.advertise<LoopClosure>("decisions", 100);
   d->services_ = std::make_unique<MapServices>(pnh, *d);
+  if (parameters.publish_descriptors)
+    d->descriptors_ = std::make_unique<DescriptorPublisher>(nh, parameters.robot, parameters.session, config);
 
   Detector* self = d.get();
   d->updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, name);
@@ -215,6 +218,8 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
     return;
   }
   counters_.addTimes(outcome.times);
+  if (descriptors_)
+    descriptors_->publish(header, outcome, detector_->loopDetector());
   if (!detector_->localisationMode())
     ++counters_.stored;
   if (outcome.verified)

@@ -136,6 +136,10 @@ const std::vector<RosParameter>& rosParameterTable()
            "with verify: only verified loops are published (else unverified ones go out flagged)"),
       number("verify_memory", &RosParameters::verify_memory, 256.0, 1.0, 65536.0, "MB", "all",
              "bound of the stored features of history frames"),
+      flag("publish_descriptors", &RosParameters::publish_descriptors, false, "all",
+           "publish every stored frame's descriptor on place_descriptors (PlaceDescriptor) for PlaceServers"),
+      word("robot", &RosParameters::robot, "", "", "all",
+           "robot name in place_descriptors (empty: the node's namespace); the session is robot[/session]"),
   };
   return table;
 }

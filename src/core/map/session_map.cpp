@@ -27,13 +27,18 @@ SessionMap::SessionMap(PlaceDatabase frames, SessionInfo info) : SessionMap(fram
 
 uint32_t SessionMap::addSession(SessionInfo info, size_t capacity)
 {
+  return addSession(std::move(info), capacity, nextId());
+}
+
+uint32_t SessionMap::addSession(SessionInfo info, size_t capacity, uint64_t first_id)
+{
   if (info.name.empty())
     throw Error("a session needs a name");
   if (findSession(info.name) >= 0)
     throw Error("session name '" + info.name + "' is already in the map (" + std::to_string(sessions_.size()) +
                 " sessions); expected a new name");
   PlaceDatabase frames(layout_, capacity, config_yaml_);
-  frames.renumber(nextId());
+  frames.renumber(first_id);
   sessions_.push_back(std::move(info));
   frames_.push_back(std::move(frames));
   return static_cast<uint32_t>(sessions_.size() - 1);

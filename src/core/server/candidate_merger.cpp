@@ -1,0 +1,101 @@
+#include "openable/candidate_merger.h"
+
+#include <algorithm>
+
+namespace openable
+{
+CandidateMerger::CandidateMerger(const Config& config) : config_(config)
+{
+  config_.validateOrThrow();
+}
+
+uint32_t CandidateMerger::sessionIndex(const std::string& name)
+{
+  const auto found = indices_.find(name);
+  if (found != indices_.end())
+    return found->second;
+  const auto index = uint32_t(names_.size());
+  names_.push_back(name);
+  indices_.emplace(name, index);
+  return index;
+}
+
+MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
+{
+  if (answers.empty())
+    throw Error("CandidateMerger: no server answered");
+  for (const ServerCandidates& a : answers)
+    if (a.query_session != answers.front().query_session || a.query_frame != answers.front().query_frame)
+      throw Error("CandidateMerger: answers for different queries (session '" + a.query_session + "' frame " +
+                  std::to_string(a.query_frame) + " vs session '" + answers.front().query_session + "' frame " +
+                  std::to_string(answers.front().query_frame) + ")");
+  // Server order fixes the order of equal distances, whatever order the answers arrived in.
+  std::sort(answers.begin(), answers.end(),
+            [](const ServerCandidates& a, const ServerCandidates& b) { return a.server < b.server; });
+
+  MergedOutcome out;
+  const ServerCandidates& first = answers.front();
+  out.query_session = first.query_session;
+  out.query_robot = first.query_robot;
+  out.query_frame = first.query_frame;
+  out.query_stamp = first.query_stamp;
+  out.has_query_pose = first.has_query_pose;
+  out.query_pose = first.query_pose;
+  out.servers = answers.size();
+
+  std::vector<ServerCandidate> all;
+  bool own_excluded = false;
+  size_t other_frames = 0;
+  Detection& d = out.detection;
+  for (const ServerCandidates& a : answers)
+  {
+    all.insert(all.end(), a.top.begin(), a.top.end());
+    d.candidates += a.candidates;
+    own_excluded = own_excluded || a.own_excluded;
+    other_frames += a.other_frames;
+    if (a.stored)
+    {
+      out.query_stored = true;
+      out.query_id = a.query_id;
+    }
+  }
+  // Each server's list is already best first: a stable sort keeps a server's own order among equals.
+  std::stable_sort(all.begin(), all.end(),
+                   [](const ServerCandidate& a, const ServerCandidate& b) { return a.distance < b.distance; });
+  d.query_id = out.query_id;
+  sessionIndex(out.query_session);
+  for (size_t i = 0; i < all.size() && i < size_t(config_.top_k); ++i)
+  {
+    const ServerCandidate& n = all[i];
+    Candidate c;
+    c.id = n.id;
+    c.session = sessionIndex(n.session);
+    c.distance = n.distance;
+    c.direction = n.direction;
+    c.shift = n.shift;
+    c.sequence_length = n.sequence_length;
+    d.top.push_back(c);
+    out.top.push_back(n);
+  }
+  // As MapMatcher decides these, over the union.
+  d.excluded = d.top.empty() && own_excluded && other_frames == 0;
+  if (!d.top.empty())
+  {
+    d.has_candidates = true;
+    d.best = d.top.front();
+    if (all.size() < 2)
+      d.uniqueness = 1.0f;
+    else
+      d.uniqueness = all[1].distance > 0.0f ? 1.0f - d.best.distance / all[1].distance : 0.0f;
+    const bool gated = config_.threshold >= 0.0 || config_.min_uniqueness > 0.0;
+    d.accepted = gated && (config_.threshold < 0.0 || d.best.distance <= config_.threshold) &&
+                 d.uniqueness >= config_.min_uniqueness;
+  }
+
+  LoopDecision& decision = decisions_.emplace(out.query_session, LoopDecision(config_)).first->second;
+  out.status = decision.decide(d);
+  out.score = decision.score(d);
+  return out;
+}
+
+}  // namespace openable

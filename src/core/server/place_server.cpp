@@ -1,0 +1,198 @@
+#include "openable/place_server.h"
+
+#include <algorithm>
+#include <sstream>
+
+#include "openable/frame_describer.h"
+
+namespace openable
+{
+namespace
+{
+Config matchingConfig(const Config& config)
+{
+  config.validateOrThrow();
+  Config c = config;
+  // MapMatcher always looks for max(top_k, 2) places and returns top_k: asking for at least two changes
+  // nothing it computes, and gives a merger the second best it needs for uniqueness.
+  c.top_k = std::max(c.top_k, 2);
+  return c;
+}
+
+std::string hex(uint64_t value)
+{
+  std::ostringstream out;
+  out << "0x" << std::hex << value;
+  return out.str();
+}
+}  // namespace
+
+PlaceServer::PlaceServer(const Config& config, std::vector<std::string> owned, std::string name)
+  : config_(config),
+    matching_(matchingConfig(config)),
+    owned_(std::move(owned)),
+    name_(std::move(name)),
+    hash_(descriptorHash(config)),
+    map_(FrameDescriber(config).layout(), config.toYaml())
+{
+}
+
+bool PlaceServer::owns(const std::string& session) const
+{
+  return owned_.empty() || std::find(owned_.begin(), owned_.end(), session) != owned_.end();
+}
+
+void PlaceServer::check(const PlaceDescriptorInput& input) const
+{
+  const std::string who = "robot '" + input.robot + "' session '" + input.session + "'";
+  if (input.session.empty())
+    throw DescriptorRefused("no session name", "robot '" + input.robot + "': a descriptor without a session name");
+  if (input.config_hash != hash_)
+    throw DescriptorRefused("configuration hash",
+                            who + ": configuration hash " + hex(input.config_hash) + " differs from this server's " +
+                                hex(hash_) + " (descriptor keys: " + config_.descriptor + ", patch " +
+                                std::to_string(config_.patch_size) +
+                                "...); the robot describes with another configuration");
+  const size_t words = map_.layout().frameWords();
+  if (input.descriptor.size() != words)
+    throw DescriptorRefused("length", who + ": descriptor of " + std::to_string(input.descriptor.size() * 8) +
+                                          " bytes; this server's configuration makes " + std::to_string(words * 8));
+  const auto s = streams_.find(input.session);
+  if (s != streams_.end() && s->second.started && input.stamp < s->second.last_stamp)
+  {
+    std::ostringstream what;
+    what.precision(17);
+    what << who << ": stamp " << input.stamp << " is before the previous frame's " << s->second.last_stamp
+         << " (a restarted robot must send a new session name)";
+    throw DescriptorRefused("stamp went backwards", what.str());
+  }
+}
+
+PlaceServer::Stream& PlaceServer::stream(const std::string& session)
+{
+  auto s = streams_.find(session);
+  if (s == streams_.end())
+  {
+    // Full sequences only (loop-closure use): the partial chains at a stream's start were the main source
+    // of false loops (MapMatcher).
+    s = streams_.emplace(session, Stream{MapMatcher(matching_, map_.layout(), false), 0.0, false}).first;
+    // A session continued from a loaded map keeps its stamps in order too.
+    const int index = map_.findSession(session);
+    if (index >= 0 && !map_.frames(uint32_t(index)).empty())
+    {
+      const PlaceDatabase& frames = map_.frames(uint32_t(index));
+      s->second.last_stamp = frames.stamp(frames.size() - 1);
+      s->second.started = true;
+    }
+  }
+  return s->second;
+}
+
+bool PlaceServer::ownExcluded(const PlaceDatabase& frames, double stamp) const
+{
+  // What MapMatcher calls the exclusion of the own session: frames exist, none outside the window. A merger
+  // needs it from the one server that holds the session (MapMatcher only reports it when the map holds
+  // nothing else).
+  if (frames.empty())
+    return false;
+  const size_t excluded = size_t(config_.exclusion_window);
+  if (frames.size() <= excluded)
+    return true;
+  if (config_.exclusion_seconds > 0.0 && stamp > 0.0)
+    return frames.stamp(0) > stamp - config_.exclusion_seconds;
+  return false;
+}
+
+ServerCandidate PlaceServer::named(const Candidate& c) const
+{
+  ServerCandidate n;
+  n.session = map_.session(c.session).name;
+  n.id = c.id;
+  n.distance = c.distance;
+  n.direction = c.direction;
+  n.shift = c.shift;
+  n.sequence_length = c.sequence_length;
+  const PlaceDatabase& frames = map_.frames(c.session);
+  if (c.position < frames.size())
+  {
+    const FrameInfo info = frames.info(c.position);
+    n.stamp = info.stamp;
+    n.has_pose = info.has_pose;
+    n.pose = info.pose;
+  }
+  return n;
+}
+
+ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
+{
+  try
+  {
+    check(input);
+  }
+  catch (const DescriptorRefused& e)
+  {
+    ++refused_[e.reason()];
+    throw;
+  }
+  const bool owned = owns(input.session);
+  int own = map_.findSession(input.session);
+  if (owned && own < 0)
+  {
+    const size_t capacity = config_.max_history > 0 ? size_t(config_.max_history) : 0;
+    own = int(map_.addSession(SessionInfo{input.session, input.robot, input.stamp}, capacity, 0));
+  }
+  Stream& s = stream(input.session);
+
+  ServerCandidates out;
+  out.server = name_;
+  out.query_session = input.session;
+  out.query_robot = input.robot;
+  out.query_frame = input.frame_id;
+  out.query_stamp = input.stamp;
+  out.has_query_pose = input.has_pose;
+  out.query_pose = input.pose;
+  const Detection detection = s.matcher.match(input.descriptor, map_, own, input.stamp);
+  out.candidates = detection.candidates;
+  for (const Candidate& c : detection.top)
+    out.top.push_back(named(c));
+  out.other_frames = map_.frameCount();
+  if (own >= 0)
+  {
+    const PlaceDatabase& frames = map_.frames(uint32_t(own));
+    out.own_excluded = ownExcluded(frames, input.stamp);
+    out.other_frames -= frames.size();
+  }
+  if (owned)
+  {
+    FrameInfo info;
+    info.stamp = input.stamp;
+    info.source = input.robot;
+    info.has_pose = input.has_pose;
+    info.pose = input.pose;
+    out.query_id = map_.add(uint32_t(own), input.descriptor, info);
+    out.stored = true;
+  }
+  s.last_stamp = input.stamp;
+  s.started = true;
+  return out;
+}
+
+void PlaceServer::save(const std::string& path) const
+{
+  map_.save(path);
+}
+
+void PlaceServer::load(const std::string& path)
+{
+  SessionMap loaded = SessionMap::load(path);
+  const Config theirs = Config::fromYamlString(loaded.configYaml());
+  const std::string differences = descriptorDifferences(config_, theirs, "the map");
+  if (!differences.empty())
+    throw Error("map '" + path + "' was described with another configuration: " + differences);
+  if (loaded.layout() != map_.layout())
+    throw Error("map '" + path + "': its descriptor layout differs from this configuration's");
+  map_ = std::move(loaded);
+  streams_.clear();
+}
+
+}  // namespace openable

@@ -1,0 +1,19 @@
+// Standalone place merger: loads the openable_ros/PlaceMerger nodelet in this process, with this
+// node's name, namespace, remappings and private parameters (the image_proc src/nodes pattern).
+#include <nodelet/loader.h>
+#include <ros/ros.h>
+
+int main(int argc, char** argv)
+{
+  ros::init(argc, argv, "place_merger");
+  nodelet::Loader loader(false);
+  nodelet::M_string remappings(ros::names::getRemappings().begin(), ros::names::getRemappings().end());
+  nodelet::V_string my_argv(argv + 1, argv + argc);
+  if (!loader.load(ros::this_node::getName(), "openable_ros/PlaceMerger", remappings, my_argv))
+  {
+    ROS_FATAL("could not load the openable_ros/PlaceMerger nodelet (is the package built and sourced?)");
+    return 1;
+  }
+  ros::spin();
+  return 0;
+}
