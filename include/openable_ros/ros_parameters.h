@@ -26,7 +26,6 @@ struct RosParameters
   std::string map_file;
   std::string map_mode = "localise";  ///< what a loaded map is for: localise | continue
   std::string session_name;           ///< the new session's name when continuing a map (empty: a default)
-  std::string robot;                  ///< stored with the new session
   // tf, keyframes, markers.
   std::string fixed_frame;
   double tf_timeout = 0.05;
@@ -44,7 +43,7 @@ struct RosParameters
   double verify_memory = 256.0;
   // Multi-robot (PlaceServer).
   bool publish_descriptors = false;
-  std::string robot;
+  std::string robot;  ///< sent in place_descriptors and stored with this run's session
 };
 
 /// One row of the table.

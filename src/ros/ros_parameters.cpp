@@ -111,7 +111,6 @@ const std::vector<RosParameter>& rosParameterTable()
            "a loaded map: localise against it (nothing stored), or continue it as a new session"),
       word("session_name", &RosParameters::session_name, "", "", "all",
            "name of this run's session in a continued map; empty: the node name and the start time"),
-      word("robot", &RosParameters::robot, "", "", "all", "robot name stored with this run's session"),
       word("fixed_frame", &RosParameters::fixed_frame, "", "", "all",
            "frame of the poses (e.g. odom); empty: no tf, no markers, no keyframing"),
       number("tf_timeout", &RosParameters::tf_timeout, 0.05, 0.0, 10.0, "s", "all",
@@ -139,7 +138,8 @@ const std::vector<RosParameter>& rosParameterTable()
       flag("publish_descriptors", &RosParameters::publish_descriptors, false, "all",
            "publish every stored frame's descriptor on place_descriptors (PlaceDescriptor) for PlaceServers"),
       word("robot", &RosParameters::robot, "", "", "all",
-           "robot name in place_descriptors (empty: the node's namespace); the session is robot[/session]"),
+           "robot name in place_descriptors (empty: the node's namespace; the session is robot[/session]) and "
+           "stored with this run's session of the map"),
   };
   return table;
 }
