@@ -102,7 +102,8 @@ public:
 
   /// Cell values as CV_32F, rows() x columns(), oldest row first.
   cv::Mat cells() const;
-  /// The picture as 8-bit BGR, integer-upscaled (nearest neighbour) to at most size() pixels square.
+  /// The picture as 8-bit BGR, always size() x size() pixels (a steady shape for viewers): the cells scaled
+  /// (nearest neighbour) until the longer side fills it, the rest black.
   /// Distances through the colour map, excluded cells dark blue-grey, unknown cells black, loops as
   /// white-and-black rings. Empty before the first row. Throws Error for a bad colour map.
   cv::Mat render(const RenderOptions& options) const;

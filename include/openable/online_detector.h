@@ -8,6 +8,7 @@
 
 #include "openable/config.h"
 #include "openable/frame_describer.h"
+#include "openable/geo_position.h"
 #include "openable/geometric_verifier.h"
 #include "openable/loop_decision.h"
 #include "openable/loop_detector.h"
@@ -27,6 +28,11 @@ struct FrameInput
   std::string source;  ///< file name or topic: stored with the frame, used in messages
   bool has_pose = false;
   std::array<double, 7> pose{{0, 0, 0, 0, 0, 0, 1}};  ///< x y z qx qy qz qw in a fixed frame
+  /// Where the frame was taken (e.g. the detector nodelets' ~fix). The pipeline does not use it and the map
+  /// does not store it: the caller keeps it by the outcome's frame id (geoPositionsCsvLine), for the KML
+  /// export (openable_trajectory --geo).
+  bool has_geo = false;
+  GeoPosition geo;
 };
 
 /// What the pipeline does besides the configuration's keys (the nodelets' ROS parameters map onto it).

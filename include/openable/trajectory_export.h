@@ -5,19 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "openable/geo_position.h"
 #include "openable/loop_list.h"
 
 namespace openable
 {
-/// Where a frame was on the Earth (WGS84 degrees, metres).
-struct GeoPosition
-{
-  double latitude = 0.0;
-  double longitude = 0.0;
-  double altitude = 0.0;
-  double stamp = 0.0;
-};
-
 /// Geographic positions by frame from a CSV with the header `frame,stamp,latitude,longitude,altitude`
 /// (e.g. converted from GPS or KITTI's OXTS). Throws Error for a missing file, another header, a malformed
 /// line (with its number), a latitude outside [-90, 90], a longitude outside [-180, 180] or a frame given

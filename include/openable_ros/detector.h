@@ -2,8 +2,10 @@
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
+#include <sensor_msgs/NavSatFix.h>
 #include <std_msgs/Header.h>
 
+#include <fstream>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -14,10 +16,12 @@
 #include "openable/throttle.h"
 #include "openable_ros/LoopClosure.h"
 #include "openable_ros/detector_diagnostics.h"
+#include "openable_ros/fix_history.h"
 #include "openable_ros/loop_markers.h"
 #include "openable_ros/matrix_publisher.h"
 #include "openable_ros/pose_lookup.h"
 #include "openable_ros/ros_parameters.h"
+#include "openable_ros/sequence_gaps.h"
 
 namespace openable_ros
 {
@@ -51,7 +55,8 @@ public:
   void setCamera(const openable::PinholeCamera& camera);
   /// Warns while synchronised inputs arrive without pairing up (or nothing ever arrives).
   void watchSync(const std::vector<std::string>& topics, const std::string& advice);
-  void noteInput(size_t index);
+  /// A message reached input `index` (its header.seq, for the frames lost in queues: SequenceGaps).
+  void noteInput(size_t index, uint32_t seq);
   void noteSet();
   void noteDropped(size_t dropped);
 
@@ -83,6 +88,10 @@ private:
   std::string sessionName() const;
   /// Gives `next` the camera the current detector verifies with (a reset or a map keeps it).
   void keepCamera(openable::OnlineDetector& next) const;
+  /// ~fix: kept for the frames around its stamp (FixHistory).
+  void fixCallback(const sensor_msgs::NavSatFixConstPtr& msg);
+  /// (Re)starts ~geo_file with its header: frame ids start again after a reset or a map load.
+  void restartGeoFile();
   void warnThrottled(const std::string& key, double period, const std::string& message);
 
   std::mutex mutex_;
@@ -98,6 +107,10 @@ private:
   ros::Publisher loop_pub_;
   ros::Publisher decisions_pub_;
   FrameCounters counters_;
+  SequenceGaps gaps_;
+  FixHistory fixes_;
+  ros::Subscriber fix_sub_;
+  std::ofstream geo_out_;
   DetectorDiagnostics diagnostics_;
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::Timer diagnostics_timer_;

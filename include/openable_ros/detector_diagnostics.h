@@ -21,6 +21,11 @@ struct FrameCounters
   uint64_t skipped_keyframe = 0;
   uint64_t loops = 0;
   uint64_t dropped_by_synchroniser = 0;
+  /// Messages that never reached a callback (subscriber or publisher queue full), from header.seq gaps
+  /// (SequenceGaps: what it can and cannot see). Not part of "received".
+  uint64_t dropped_queue = 0;
+  uint64_t fixes = 0;            ///< usable ~fix messages
+  uint64_t frames_with_fix = 0;  ///< stored frames that took a fix (written to ~geo_file when set)
   std::map<std::string, uint64_t> rejected;      ///< by reason
   std::map<std::string, uint64_t> statuses;      ///< frames per decision status
   std::map<std::string, uint64_t> verification;  ///< verifier outcomes ("accepted", "identical images", ...)
@@ -43,6 +48,7 @@ public:
 private:
   uint64_t received_at_last_ = 0;
   uint64_t rejected_at_last_ = 0;
+  uint64_t dropped_at_last_ = 0;
   ros::WallTime last_ = ros::WallTime::now();
 };
 

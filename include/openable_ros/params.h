@@ -18,6 +18,15 @@ namespace openable_ros
 openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openable::Config& defaults,
                                 std::vector<std::string>& warnings);
 
+/// Makes `config` valid by replacing, key by key, what Config::validate() refuses with the value in
+/// `fallback` (which must be valid). One message per refusal in `messages`:
+/// "~key: value 'x' is not allowed; expected <rule>; <verb> key = <fallback value>" (or "<verb> <everything>"
+/// when the rule names no key). False when a rule is still broken afterwards: the caller then falls back
+/// whole. Shared by the parameter path (verb "using", the defaults) and dynamic_reconfigure ("keeping", the
+/// values in force).
+bool fallBackKeyByKey(openable::Config& config, const openable::Config& fallback, const std::string& verb,
+                      const std::string& everything, std::vector<std::string>& messages);
+
 /// ROS-only parameters with a rule. Each reads ~name, and when it is missing keeps `fallback`; when it
 /// is set but breaks the rule (or has the wrong type) it explains in `warnings` and keeps `fallback`.
 double readDouble(const ros::NodeHandle& private_nh, const std::string& name, double fallback, double min, double max,

@@ -32,6 +32,9 @@ struct RosParameters
   double keyframe_distance = 0.0;
   double keyframe_angle = 0.0;
   double markers_rate = 1.0;
+  // Geographic positions (~fix).
+  double fix_tolerance = 0.5;
+  std::string geo_file;
   // distance_matrix.
   double matrix_rate = 2.0;
   int matrix_size = 512;
@@ -65,6 +68,11 @@ const std::vector<RosParameter>& rosParameterTable();
 /// Every parameter of the table from the private node handle (each problem explained in `warnings`),
 /// then the cross-parameter rules (keyframes need ~fixed_frame).
 RosParameters readRosParameters(const ros::NodeHandle& private_nh, std::vector<std::string>& warnings);
+
+/// Why `value` (as text) breaks the table's range or choices of ROS parameter `name`, as
+/// "~name: value 'x' is not allowed; expected <rule>"; empty when allowed or when the row has no rule.
+/// Used where values arrive without the parameter server (dynamic_reconfigure).
+std::string rosParameterProblem(const std::string& name, const std::string& value);
 
 /// Private parameters that no table knows (neither openable::Config's nor this one), e.g. a typo
 /// ("treshold"): one warning each, naming the closest known name.

@@ -363,21 +363,20 @@ cv::Mat DistanceMatrixView::render(const RenderOptions& options) const
     }
   }
 
-  const int factor = std::max(1, size_ / std::max(values.rows, values.cols));
-  cv::Mat image;
-  if (factor > 1)
-  {
-    cv::resize(bgr, image, cv::Size(values.cols * factor, values.rows * factor), 0, 0, cv::INTER_NEAREST);
-  }
-  else
-  {
-    image = bgr;
-  }
+  // Always size_ x size_ pixels, so a viewer (rviz) never sees the image change shape as the history grows
+  // or is pooled: the cells are scaled (nearest neighbour) until the longer side fills the image, and the
+  // rest of the shorter side is unknown (black). A non-integer scale makes some cells a pixel wider than
+  // others, which is the price of a steady size.
+  const double scale = double(size_) / double(std::max(values.rows, values.cols));
+  const cv::Size picture(std::max(1, std::min(size_, int(std::lround(values.cols * scale)))),
+                         std::max(1, std::min(size_, int(std::lround(values.rows * scale)))));
+  cv::Mat image(size_, size_, CV_8UC3, cv::Scalar(kUnknownColor));
+  cv::resize(bgr, image(cv::Rect(cv::Point(0, 0), picture)), picture, 0, 0, cv::INTER_NEAREST);
 
   if (options.mark_loops && has_first_reference_)
   {
     const uint64_t first_shown_query = queries_ - uint64_t(values.rows) * (mode_ == Mode::kRollingWindow ? 1 : 0);
-    const int radius = std::max(3, factor);
+    const int radius = std::max(3, int(scale));
     for (const auto& loop : loops_)
     {
       int row = 0;
@@ -402,7 +401,7 @@ cv::Mat DistanceMatrixView::render(const RenderOptions& options) const
       {
         continue;
       }
-      const cv::Point centre(int(column) * factor + factor / 2, row * factor + factor / 2);
+      const cv::Point centre(int((double(column) + 0.5) * scale), int((row + 0.5) * scale));
       cv::circle(image, centre, radius + 1, kLoopOuterColor, 1, cv::LINE_8);
       cv::circle(image, centre, radius, kLoopInnerColor, 1, cv::LINE_8);
     }

@@ -53,6 +53,17 @@ void addStyle(std::ostringstream& out, const std::string& id, const std::string&
 }
 }  // namespace
 
+std::string geoPositionsCsvHeader()
+{
+  return "frame,stamp,latitude,longitude,altitude\n";
+}
+
+std::string geoPositionsCsvLine(uint64_t frame, const GeoPosition& position)
+{
+  return std::to_string(frame) + "," + number(position.stamp, 6) + "," + number(position.latitude, 9) + "," +
+         number(position.longitude, 9) + "," + number(position.altitude, 3) + "\n";
+}
+
 std::string xmlEscape(const std::string& text)
 {
   std::string out;

@@ -1,11 +1,13 @@
 #include "openable_ros/detector.h"
 
+#include <cmath>
 #include <ctime>
 #include <fstream>
 
 #include "openable/error.h"
 #include "openable/frame_describer.h"
 #include "openable/reference_map.h"
+#include "openable/trajectory_export.h"
 #include "openable_ros/conversions.h"
 #include "openable_ros/descriptor_publisher.h"
 #include "openable_ros/live_reconfigure.h"
@@ -109,6 +111,8 @@ std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle p
   d->services_ = std::make_unique<MapServices>(pnh, *d);
   if (parameters.publish_descriptors)
     d->descriptors_ = std::make_unique<DescriptorPublisher>(nh, parameters.robot, parameters.session, config);
+  d->restartGeoFile();
+  d->fix_sub_ = nh.subscribe("fix", 10, &Detector::fixCallback, d.get());
 
   Detector* self = d.get();
   d->updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, name);
@@ -157,6 +161,7 @@ void Detector::process(const std_msgs::Header& header, const std::string& topic,
   input.has_pose = poses_->lookup(header, input.pose, problem);
   if (!problem.empty())
     warnThrottled("tf", kWarnPeriod, problem);
+  input.has_geo = fixes_.nearest(input.stamp, parameters_.fix_tolerance, input.geo);
 
   openable::FrameOutcome outcome;
   try
@@ -185,6 +190,47 @@ void Detector::process(const std_msgs::Header& header, const std::string& topic,
     return;
   }
   publish(header, outcome);
+  if (!outcome.stored || !input.has_geo)
+    return;
+  ++counters_.frames_with_fix;
+  if (geo_out_.is_open())
+    geo_out_ << openable::geoPositionsCsvLine(outcome.query.id, input.geo) << std::flush;
+}
+
+void Detector::fixCallback(const sensor_msgs::NavSatFixConstPtr& msg)
+{
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (msg->status.status < sensor_msgs::NavSatStatus::STATUS_FIX || !std::isfinite(msg->latitude) ||
+      !std::isfinite(msg->longitude) || std::abs(msg->latitude) > 90.0 || std::abs(msg->longitude) > 180.0)
+  {
+    warnThrottled("fix", kWarnPeriod,
+                  "'" + fix_sub_.getTopic() + "': no usable fix (status " + std::to_string(int(msg->status.status)) +
+                      ", latitude " + std::to_string(msg->latitude) + ", longitude " + std::to_string(msg->longitude) +
+                      "); frames around it have no geographic position");
+    return;
+  }
+  openable::GeoPosition fix;
+  fix.latitude = msg->latitude;
+  fix.longitude = msg->longitude;
+  // NavSatFix allows an unknown (NaN) altitude; KML needs a number.
+  fix.altitude = std::isfinite(msg->altitude) ? msg->altitude : 0.0;
+  fix.stamp = msg->header.stamp.toSec();
+  fixes_.add(fix);
+  ++counters_.fixes;
+}
+
+void Detector::restartGeoFile()
+{
+  if (parameters_.geo_file.empty())
+    return;
+  geo_out_.close();
+  geo_out_.clear();
+  geo_out_.open(parameters_.geo_file, std::ios::trunc);
+  if (geo_out_)
+    geo_out_ << openable::geoPositionsCsvHeader() << std::flush;
+  else
+    ROS_ERROR_STREAM_NAMED(name_, "~geo_file: cannot write '" << parameters_.geo_file
+                                                              << "'; the frames' fixes are not recorded");
 }
 
 bool Detector::acceptStamp(const std_msgs::Header& header, const std::string& topic, openable::FrameOutcome& outcome,
@@ -296,9 +342,11 @@ void Detector::watchSync(const std::vector<std::string>& topics, const std::stri
                                     });
 }
 
-void Detector::noteInput(size_t index)
+void Detector::noteInput(size_t index, uint32_t seq)
 {
   std::lock_guard<std::mutex> lock(mutex_);
+  gaps_.note(index, seq);
+  counters_.dropped_queue = gaps_.lost();
   if (sync_)
     sync_->noteInput(index);
 }
@@ -321,6 +369,8 @@ void Detector::resetLocked()
   detector_->reset();
   matrix_->clear();
   markers_->clear();
+  fixes_.clear();
+  restartGeoFile();
 }
 
 bool Detector::saveMap(const std::string& path, std::string& message, uint32_t& frames)

@@ -30,6 +30,8 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   const double rate = double(counters.received - received_at_last_) / elapsed;
   const uint64_t rejected_total = counters.rejectedTotal();
   const uint64_t rejected_recently = rejected_total - rejected_at_last_;
+  const uint64_t dropped_recently = counters.dropped_queue - dropped_at_last_;
+  dropped_at_last_ = counters.dropped_queue;
   received_at_last_ = counters.received;
   rejected_at_last_ = rejected_total;
   last_ = now;
@@ -38,6 +40,11 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   if (rejected_recently > 0)
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%lu input frames rejected since the last report",
                     static_cast<unsigned long>(rejected_recently));
+  else if (dropped_recently > 0)
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "%lu input frames dropped in a queue since the last report (raise ~queue_size, or the "
+                    "detector is slower than the input)",
+                    static_cast<unsigned long>(dropped_recently));
   else
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, localising ? "localising" : "running");
   status.add("mode",
@@ -50,6 +57,8 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   for (const auto& r : counters.rejected)
     status.add("rejected: " + r.first, r.second);
   status.add("frames dropped by the synchroniser", counters.dropped_by_synchroniser);
+  // Gaps in the inputs' header.seq: messages published that never reached a callback (a full queue).
+  status.add("frames dropped (queue)", counters.dropped_queue);
   // What is in force (dynamic_reconfigure may have changed it).
   const openable::Config& config = detector.config();
   status.add("threshold", config.threshold);
@@ -64,6 +73,11 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("match latency last (ms)", counters.match_ms_last);
   status.add("match latency mean (ms)", counters.match_ms_total / timed);
   status.add("loop closures", counters.loops);
+  if (counters.fixes > 0)
+  {
+    status.add("fixes received", counters.fixes);
+    status.add("frames with a fix", counters.frames_with_fix);
+  }
   status.add("distance_matrix images published", matrix_published);
   if (parameters.verify)
     status.add("verification", detector.hasVerifier() ? "on" : "waiting for camera_info");

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "openable_ros/detector.h"
+#include "openable_ros/params.h"
 
 namespace openable_ros
 {
@@ -23,11 +26,24 @@ std::string text(double v)
   return out.str();
 }
 
-void readDisplay(const DetectorConfig& c, RosParameters& p)
+/// The display parameters of the request, each checked against the ROS parameter table; a refused one
+/// keeps the value in force (`current`) and is explained in `refused`.
+void readDisplay(const DetectorConfig& c, RosParameters& p, const RosParameters& current,
+                 std::vector<std::string>& refused)
 {
-  p.matrix_rate = c.matrix_rate;
-  p.matrix_size = c.matrix_size;
-  p.matrix_mode = c.matrix_mode;
+  auto allowed = [&refused](const std::string& name, const std::string& value, const std::string& kept)
+  {
+    const std::string problem = rosParameterProblem(name, value);
+    if (!problem.empty())
+      refused.push_back(problem + "; keeping " + name + " = " + kept);
+    return problem.empty();
+  };
+  p.matrix_rate = allowed("matrix_rate", text(c.matrix_rate), text(current.matrix_rate)) ? c.matrix_rate
+                                                                                           : current.matrix_rate;
+  p.matrix_size = allowed("matrix_size", std::to_string(c.matrix_size), std::to_string(current.matrix_size))
+                      ? c.matrix_size
+                      : current.matrix_size;
+  p.matrix_mode = allowed("matrix_mode", c.matrix_mode, current.matrix_mode) ? c.matrix_mode : current.matrix_mode;
   p.matrix_threshold_view = c.matrix_threshold_view;
 }
 
@@ -90,20 +106,29 @@ void LiveReconfigure::callback(DetectorConfig& requested, uint32_t /*level*/)
 {
   dynamic_reconfigure::Config message;
   requested.__toMessage__(message);
-  openable::Config config = detector_.config();
+  const openable::Config in_force = detector_.config();
+  openable::Config config = in_force;
   RosParameters display = detector_.parameters();
+  std::vector<std::string> refused;
   try
   {
     toCore(message, config);
+    // The cfg gives these keys no min/max, so the server passes values as sent (it would clamp them
+    // silently otherwise: threshold 5 would become 1, which accepts everything). The core's key table
+    // judges them here, as it judges private parameters; each refused key keeps its value in force.
+    if (!fallBackKeyByKey(config, in_force, "keeping", "the previous values", refused))
+      config = in_force;
   }
   catch (const std::exception& e)
   {
-    ROS_WARN_STREAM("dynamic_reconfigure: " << e.what() << "; keeping the previous values");
-    config = detector_.config();
+    refused.push_back(std::string(e.what()) + "; keeping the previous values");
+    config = in_force;
   }
-  readDisplay(requested, display);
+  readDisplay(requested, display, detector_.parameters(), refused);
+  for (const auto& problem : refused)
+    ROS_ERROR_STREAM("dynamic_reconfigure refused " << problem);
   detector_.applyLive(config, display);
-  // Write back what is in force, so rqt_reconfigure shows the truth.
+  // Write back what is in force, so rqt_reconfigure (and the caller of set_parameters) sees the truth.
   fromCore(config, message);
   requested.__fromMessage__(message);
   writeDisplay(display, requested);

@@ -3,6 +3,7 @@
 #include <XmlRpcValue.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 
 #include "openable/error.h"
@@ -113,6 +114,20 @@ bool toText(XmlRpc::XmlRpcValue& value, const std::string& type, std::string& te
   return false;
 }
 
+/// A key's value for a message: numbers without the round-trip digits Config::get keeps (0.05, not
+/// 0.050000000000000003).
+std::string shown(const std::string& value)
+{
+  char* end = nullptr;
+  const double number = std::strtod(value.c_str(), &end);
+  if (value.empty() || *end != '\0')
+    return value;
+  std::ostringstream out;
+  out.precision(15);
+  out << number;
+  return out.str();
+}
+
 std::string keyOfError(const std::string& error)
 {
   return error.substr(0, error.find(':'));
@@ -155,14 +170,25 @@ openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openabl
                        camera_type + "'");
     config.camera_type = camera_type;
   }
-  // Validation errors name their key ("key: value ..."): that key falls back to its default, and validation
-  // runs again, since a fallback can resolve (or expose) a rule that involves two keys.
+  if (fallBackKeyByKey(config, defaults, "using", "the defaults", warnings))
+  {
+    return config;
+  }
+  warnings.push_back("the parameters still break a rule after falling back key by key; using every default");
+  return defaults;
+}
+
+bool fallBackKeyByKey(openable::Config& config, const openable::Config& fallback, const std::string& verb,
+                      const std::string& everything, std::vector<std::string>& messages)
+{
+  // Validation errors name their key ("key: value ..."): that key falls back, and validation runs again,
+  // since a fallback can resolve (or expose) a rule that involves two keys.
   for (size_t round = 0; round < openable::Config::keys().size(); ++round)
   {
     const auto errors = config.validate();
     if (errors.empty())
     {
-      return config;
+      return true;
     }
     for (const auto& error : errors)
     {
@@ -179,12 +205,12 @@ openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openabl
         }
         try
         {
-          config.set(key, defaults.get(key));
-          fallbacks += (fallbacks.empty() ? "" : ", ") + key + " = " + defaults.get(key);
+          config.set(key, fallback.get(key));
+          fallbacks += (fallbacks.empty() ? "" : ", ") + key + " = " + shown(fallback.get(key));
         }
         catch (const openable::Error&)
         {
-          // Not a key (a rule that names something else): the whole-config fallback below handles it.
+          // Not a key (a rule that names something else): the caller's whole-config fallback handles it.
         }
         if (slash == std::string::npos)
         {
@@ -192,11 +218,10 @@ openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openabl
         }
         start = slash + 1;
       }
-      warnings.push_back("~" + error + "; using " + (fallbacks.empty() ? "the defaults" : fallbacks));
+      messages.push_back("~" + error + "; " + verb + " " + (fallbacks.empty() ? everything : fallbacks));
     }
   }
-  warnings.push_back("the parameters still break a rule after falling back key by key; using every default");
-  return defaults;
+  return config.validate().empty();
 }
 
 double readDouble(const ros::NodeHandle& private_nh, const std::string& name, double fallback, double min, double max,

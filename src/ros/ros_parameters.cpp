@@ -3,6 +3,8 @@
 #include <ros/param.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include "openable/config.h"
@@ -119,6 +121,11 @@ const std::vector<RosParameter>& rosParameterTable()
              "> 0: a frame is stored only after the camera moved this far (or turned keyframe_angle)"),
       number("keyframe_angle", &RosParameters::keyframe_angle, 0.0, 0.0, M_PI, "rad", "all",
              "> 0: a turn this large makes a keyframe too"),
+      number("fix_tolerance", &RosParameters::fix_tolerance, 0.5, 0.0, 3600.0, "s", "all",
+             "a frame takes the ~fix nearest to its stamp when within this; else it has no geographic position"),
+      word("geo_file", &RosParameters::geo_file, "", "", "all",
+           "CSV of each stored frame's fix (frame,stamp,latitude,longitude,altitude), for openable_trajectory "
+           "--geo; empty: not written"),
       number("markers_rate", &RosParameters::markers_rate, 1.0, 0.0, 30.0, "Hz", "all",
              "largest loop_markers publishing rate (also sent at once after a loop closure)"),
       number("matrix_rate", &RosParameters::matrix_rate, 2.0, 0.0, 30.0, "Hz", "all",
@@ -189,6 +196,36 @@ void warnUnknownParameters(const ros::NodeHandle& private_nh, std::vector<std::s
       warnings.push_back("~" + name + " is not a parameter of this nodelet and is ignored; did you mean ~" +
                          openable::closestName(name, known) + "?");
   }
+}
+
+}  // namespace openable_ros
+
+namespace openable_ros
+{
+std::string rosParameterProblem(const std::string& name, const std::string& value)
+{
+  for (const auto& parameter : rosParameterTable())
+  {
+    if (parameter.name != name || parameter.range.empty())
+      continue;
+    const std::string refused = "~" + name + ": value '" + value + "' is not allowed; expected ";
+    if (parameter.range[0] != '[')
+    {
+      // Choices "a | b".
+      if ((" | " + parameter.range + " | ").find(" | " + value + " | ") == std::string::npos)
+        return refused + parameter.range;
+      return "";
+    }
+    double min = 0.0, max = 0.0, v = 0.0;
+    std::sscanf(parameter.range.c_str(), "[%lf, %lf]", &min, &max);
+    char* end = nullptr;
+    v = std::strtod(value.c_str(), &end);
+    if (end != value.c_str() && *end == '\0' && v >= min && v <= max)  // false for NaN too
+      return "";
+    return refused + (parameter.type == "int" ? "an integer in " : "a number in ") + parameter.range +
+           (parameter.units.empty() ? "" : " (" + parameter.units + ")");
+  }
+  return "";
 }
 
 }  // namespace openable_ros

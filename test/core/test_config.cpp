@@ -215,7 +215,7 @@ namespace
 /// The gen.add(...) entries of cfg/Detector.cfg: name -> {type, default, min, max} as written.
 struct CfgEntry
 {
-  std::string type, default_value, min, max;
+  std::string type, description, default_value, min, max;
 };
 std::map<std::string, CfgEntry> readDetectorCfg()
 {
@@ -223,9 +223,9 @@ std::map<std::string, CfgEntry> readDetectorCfg()
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   std::map<std::string, CfgEntry> entries;
   // gen.add("name", type_t, level, "description", default[, min, max][, edit_method=...])
-  const std::regex add(R"re(gen\.add\("(\w+)",\s*(\w+),\s*\w+,\s*"[^"]*",\s*([^,\)]+)(?:,\s*([^,\)=]+),\s*([^,\)=]+))?)re");
+  const std::regex add(R"re(gen\.add\("(\w+)",\s*(\w+),\s*\w+,\s*"([^"]*)",\s*([^,\)]+)(?:,\s*([^,\)=]+),\s*([^,\)=]+))?)re");
   for (auto it = std::sregex_iterator(text.begin(), text.end(), add); it != std::sregex_iterator(); ++it)
-    entries[(*it)[1]] = {(*it)[2], (*it)[3], (*it)[4], (*it)[5]};
+    entries[(*it)[1]] = {(*it)[2], (*it)[3], (*it)[4], (*it)[5], (*it)[6]};
   return entries;
 }
 
@@ -239,7 +239,7 @@ double number(const std::string& text)
 }
 }  // namespace
 
-TEST(Config, DynamicReconfigureHoldsEveryLiveKeyWithItsDefaultAndRange)
+TEST(Config, DynamicReconfigureHoldsEveryLiveKeyWithItsDefaultAndRangeButDoesNotClamp)
 {
   const auto cfg = readDetectorCfg();
   ASSERT_GE(cfg.size(), 10u);
@@ -260,9 +260,16 @@ TEST(Config, DynamicReconfigureHoldsEveryLiveKeyWithItsDefaultAndRange)
     EXPECT_DOUBLE_EQ(number(it->second.default_value), expected) << key.name;
     if (key.has_range)
     {
-      ASSERT_FALSE(it->second.min.empty()) << key.name << " has no range in cfg/Detector.cfg";
-      EXPECT_DOUBLE_EQ(number(it->second.min), key.min) << key.name;
-      EXPECT_DOUBLE_EQ(number(it->second.max), key.max) << key.name;
+      // No min/max for dynamic_reconfigure: its server would clamp an out-of-range request to them before
+      // LiveReconfigure could refuse it (threshold 5 silently became 1). The range is stated in the
+      // description instead, as "range [min, max]" (threshold: "range -1 or [0, 1]").
+      EXPECT_TRUE(it->second.min.empty()) << key.name << " has a min/max in cfg/Detector.cfg, which clamps silently";
+      const std::string& description = it->second.description;
+      std::smatch range;
+      ASSERT_TRUE(std::regex_search(description, range, std::regex(R"re(range (-1 or )?\[([^,\]]+), ([^\]]+)\])re")))
+          << key.name << ": no 'range [min, max]' in its description: " << description;
+      EXPECT_DOUBLE_EQ(range[1].matched ? -1.0 : number(range[2].str()), key.min) << key.name;
+      EXPECT_DOUBLE_EQ(number(range[3].str()), key.max) << key.name;
     }
   }
 }

@@ -165,13 +165,14 @@ TEST(DistanceMatrixView, RenderIsBoundedColouredAndMarksLoops)
   options.mark_loops = false;
   const cv::Mat plain = view.render(options);
   ASSERT_EQ(plain.type(), CV_8UC3);
-  // 20 cells upscaled by 3 (64 / 20).
-  EXPECT_EQ(plain.rows, 60);
-  EXPECT_EQ(plain.cols, 60);
+  // Always size x size: 20 cells scaled by 3.2 (64 / 20) fill it.
+  EXPECT_EQ(plain.rows, 64);
+  EXPECT_EQ(plain.cols, 64);
+  auto at = [](int cell) { return int((cell + 0.5) * 3.2); };  // the pixel in the middle of a cell
   // Unknown (upper triangle) black, excluded blue-grey, distances coloured.
-  EXPECT_EQ(plain.at<cv::Vec3b>(1, 58), cv::Vec3b(0, 0, 0));
-  EXPECT_EQ(plain.at<cv::Vec3b>(58, 58), cv::Vec3b(90, 60, 50));
-  EXPECT_NE(plain.at<cv::Vec3b>(58, 1), plain.at<cv::Vec3b>(15 * 3 + 1, 2 * 3 + 1));
+  EXPECT_EQ(plain.at<cv::Vec3b>(at(0), at(18)), cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(plain.at<cv::Vec3b>(at(18), at(18)), cv::Vec3b(90, 60, 50));
+  EXPECT_NE(plain.at<cv::Vec3b>(at(18), at(0)), plain.at<cv::Vec3b>(at(15), at(2)));
 
   options.mark_loops = true;
   const cv::Mat marked = view.render(options);
@@ -181,12 +182,36 @@ TEST(DistanceMatrixView, RenderIsBoundedColouredAndMarksLoops)
   options.threshold = 0.1;
   options.mark_loops = false;
   const cv::Mat binary = view.render(options);
-  EXPECT_EQ(binary.at<cv::Vec3b>(15 * 3 + 1, 2 * 3 + 1), cv::Vec3b(0, 0, 0));
-  EXPECT_EQ(binary.at<cv::Vec3b>(58, 1), cv::Vec3b(255, 255, 255));
+  EXPECT_EQ(binary.at<cv::Vec3b>(at(15), at(2)), cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(binary.at<cv::Vec3b>(at(18), at(0)), cv::Vec3b(255, 255, 255));
 
   options.threshold = -1;
   options.color_map = 12;
   EXPECT_THROW(view.render(options), openable::Error);
+}
+
+TEST(DistanceMatrixView, RenderKeepsItsSizeWhileTheHistoryGrowsAndIsPooled)
+{
+  // The picture used to be the cells integer-upscaled: 504, 506, ... pixels, then 257 after a pooling;
+  // rviz re-laid out its panel on every publish. Now it is size x size whatever the shape of the cells.
+  for (const auto mode : {DistanceMatrixView::Mode::kWholeHistory, DistanceMatrixView::Mode::kRollingWindow})
+  {
+    DistanceMatrixView view(64, mode);
+    for (int t = 0; t < 300; ++t)
+    {
+      view.addRow(0, streamRow(t, 3));
+      const cv::Mat image = view.render({});
+      ASSERT_EQ(image.rows, 64) << "frame " << t;
+      ASSERT_EQ(image.cols, 64) << "frame " << t;
+    }
+  }
+  // Localisation: a few query rows against a long map; the map's side fills the picture, the rest is black.
+  DistanceMatrixView view(64);
+  view.addRow(0, std::vector<float>(1000, 0.5f));
+  const cv::Mat image = view.render({});
+  ASSERT_EQ(image.size(), cv::Size(64, 64));
+  EXPECT_EQ(image.at<cv::Vec3b>(63, 63), cv::Vec3b(0, 0, 0));
+  EXPECT_NE(image.at<cv::Vec3b>(0, 63), cv::Vec3b(0, 0, 0));
 }
 
 TEST(DistanceMatrixView, ClearAndModeChangeStartOver)

@@ -3,6 +3,11 @@
 //   left ones (as two free-running cameras give): one history entry per pair, none rejected.
 // - keyframe_angle.test: ~keyframe_angle 0.5 rad with the camera turning on the spot 0.12 rad per frame: a
 //   keyframe every 5th frame; standing still or moving without turning (~keyframe_distance off) adds none.
+// - queue_drops.test: a burst of 201 small frames into ~queue_size 1: every frame is either received or
+//   counted in "frames dropped (queue)" (from header.seq gaps), and some are dropped.
+// - navsat_fix.test: ~fix (sensor_msgs/NavSatFix): each stored frame keeps the fix nearest its stamp within
+//   ~fix_tolerance, written to ~geo_file, which the KML export reads.
+// - sim_time_guard.test: replay.launch's sim_time_guard deletes /use_sim_time when roslaunch stops it.
 // - rolling_window.test: ~matrix_mode rolling_window keeps one row per frame for the last ~matrix_size
 //   frames (the whole_history detector beside it pools rows instead), oldest row on top.
 #include <geometry_msgs/TransformStamped.h>
@@ -10,14 +15,22 @@
 #include <ros/ros.h>
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <sensor_msgs/NavSatFix.h>
 
+#include <algorithm>
+#include <csignal>
 #include <cstdio>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <opencv2/imgproc.hpp>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "openable/trajectory_export.h"
 #include "test_helpers.h"
 
 using openable_ros_test::DiagnosticsWatcher;
@@ -225,24 +238,31 @@ TEST(DetectorPaths, RollingWindowKeepsOneRowPerFrameOfTheLastMatrixSizeFrames)
   const cv::Mat history = cv_bridge::toCvCopy(whole.get(), enc::BGR8)->image;
   std::printf("rolling_window %dx%d, whole_history %dx%d after %d frames\n", window.cols, window.rows, history.cols,
               history.rows, frames);
-  // 40 frames do not fit 16 rows: the rolling window shows the last 16, one row each; the whole history
-  // pools rows (4 frames per row -> 10 rows). Columns (the references) are pooled alike in both.
-  EXPECT_EQ(window.rows, size);
-  EXPECT_LT(history.rows, size);
-  EXPECT_LE(window.cols, size);
-  EXPECT_EQ(window.cols, history.cols);
-  // Oldest shown row on top: frame 24 did not know the references after it (unknown: black on the right);
-  // the newest row (frame 39) knows them all.
+  // Both pictures are always matrix_size x matrix_size pixels, however the history grows or is pooled (they
+  // used to take the shape of the cells, so rviz re-laid out its panel on every publish).
+  EXPECT_EQ(window.size(), cv::Size(size, size));
+  EXPECT_EQ(history.size(), cv::Size(size, size));
+  // 40 frames do not fit 16 rows: the rolling window shows the last 16, one row each (scale 1: a pixel row
+  // per frame), the references pooled into fewer columns, black beyond them. The newest row (frame 39)
+  // knows every reference: its used columns are the non-black ones, from the left.
   const auto black = [](const cv::Vec3b& p) { return p == cv::Vec3b(0, 0, 0); };
-  EXPECT_TRUE(black(window.at<cv::Vec3b>(0, window.cols - 1))) << window.at<cv::Vec3b>(0, window.cols - 1);
-  int black_in_last_row = 0;
-  for (int c = 0; c < window.cols; ++c)
+  int used = 0;
+  while (used < window.cols && !black(window.at<cv::Vec3b>(window.rows - 1, used)))
   {
-    black_in_last_row += black(window.at<cv::Vec3b>(window.rows - 1, c)) ? 1 : 0;
+    ++used;
   }
-  EXPECT_EQ(black_in_last_row, 0);
+  EXPECT_GT(used, 2);
+  EXPECT_LT(used, size);
+  for (int c = used; c < window.cols; ++c)
+  {
+    EXPECT_TRUE(black(window.at<cv::Vec3b>(window.rows - 1, c))) << "column " << c;
+  }
+  // Oldest shown row on top: frame 24 did not know the references after it (unknown: black on the right of
+  // the used columns), and knew the first ones.
+  EXPECT_TRUE(black(window.at<cv::Vec3b>(0, used - 1))) << window.at<cv::Vec3b>(0, used - 1);
+  EXPECT_FALSE(black(window.at<cv::Vec3b>(0, 0))) << window.at<cv::Vec3b>(0, 0);
 
-  // More frames: the window scrolls (still 16 rows), the whole history grows.
+  // More frames: the window scrolls, the whole history grows; neither picture changes size.
   for (int i = frames; i < frames + 8; ++i)
   {
     stamp += ros::Duration(0.1);
@@ -250,8 +270,146 @@ TEST(DetectorPaths, RollingWindowKeepsOneRowPerFrameOfTheLastMatrixSizeFrames)
     ros::WallDuration(0.1).sleep();
   }
   ASSERT_TRUE(waitFor([&] { return latest(rolling) && latest(whole); }, 20.0));
-  EXPECT_EQ(cv_bridge::toCvCopy(rolling.get(), enc::BGR8)->image.rows, size);
-  EXPECT_GT(cv_bridge::toCvCopy(whole.get(), enc::BGR8)->image.rows, history.rows);
+  EXPECT_EQ(cv_bridge::toCvCopy(rolling.get(), enc::BGR8)->image.size(), cv::Size(size, size));
+  EXPECT_EQ(cv_bridge::toCvCopy(whole.get(), enc::BGR8)->image.size(), cv::Size(size, size));
+}
+
+TEST(DetectorPaths, FramesDroppedInTheQueueAreCountedFromSeqGaps)
+{
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  const std::string dir = pnh.param<std::string>("data_dir", OPENABLE_SOURCE_DIR "/../shared/data/gardens_point");
+  DiagnosticsWatcher diagnostics(nh);
+  // A deep publisher queue: what is lost, is lost in the detector's ~queue_size 1 subscriber queue.
+  ros::Publisher pub = nh.advertise<sensor_msgs::Image>("image", 1000);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }, 30.0));
+
+  // Small frames, decoded before the burst, so they arrive far faster than the detector describes them.
+  std::vector<sensor_msgs::ImagePtr> burst;
+  ros::Time stamp(900.0);
+  const int frames = 200;
+  for (int i = 0; i <= frames; ++i)
+  {
+    cv::Mat small;
+    cv::resize(gardensPoint(dir, i % 100), small, cv::Size(160, 120), 0, 0, cv::INTER_AREA);
+    stamp += ros::Duration(0.1);
+    burst.push_back(openable_ros_test::toMsg(small, enc::BGR8, stamp, "camera"));
+  }
+  // The first frame alone: seq gaps can only be seen after a frame has arrived.
+  pub.publish(burst[0]);
+  ASSERT_TRUE(waitFor([&] { return diagnostics.number("frames received") == 1; }, 20.0));
+  for (int i = 1; i <= frames; ++i)
+  {
+    pub.publish(burst[size_t(i)]);
+  }
+  // Every published frame is accounted for: received (the queue keeps the newest, so the last one always
+  // arrives) or dropped.
+  const auto accounted = [&]
+  { return diagnostics.number("frames received") + diagnostics.number("frames dropped (queue)"); };
+  EXPECT_TRUE(waitFor([&] { return accounted() == frames + 1; }, 30.0))
+      << "received " << diagnostics.number("frames received") << " + dropped "
+      << diagnostics.number("frames dropped (queue)") << ", published " << frames + 1;
+  std::printf("burst of %d frames into ~queue_size 1: %ld received, %ld dropped (queue)\n", frames + 1,
+              diagnostics.number("frames received"), diagnostics.number("frames dropped (queue)"));
+  EXPECT_GT(diagnostics.number("frames dropped (queue)"), 0);
+  EXPECT_LT(diagnostics.number("frames received"), frames + 1);
+}
+
+TEST(DetectorPaths, EachStoredFrameKeepsTheNearestFixForTheKml)
+{
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  const std::string dir = pnh.param<std::string>("data_dir", OPENABLE_SOURCE_DIR "/../shared/data/gardens_point");
+  const std::string geo_file = pnh.param<std::string>("geo_file", "");
+  ASSERT_FALSE(geo_file.empty());
+  DiagnosticsWatcher diagnostics(nh);
+  ros::Publisher fix_pub = nh.advertise<sensor_msgs::NavSatFix>("fix", 100);
+  ros::Publisher pub = nh.advertise<sensor_msgs::Image>("image", 100);
+  ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && fix_pub.getNumSubscribers() > 0; }, 30.0));
+
+  // A hand-made walk: one fix a second, north-east by 0.001 degrees each; then a receiver without a fix.
+  auto fix = [](double stamp, double latitude, double longitude, double altitude, int8_t status)
+  {
+    sensor_msgs::NavSatFix f;
+    f.header.stamp = ros::Time(stamp);
+    f.header.frame_id = "gps";
+    f.status.status = status;
+    f.latitude = latitude;
+    f.longitude = longitude;
+    f.altitude = altitude;
+    return f;
+  };
+  for (int k = 0; k < 5; ++k)
+  {
+    fix_pub.publish(fix(1000.0 + k, 48.0 + 0.001 * k, 11.0 + 0.001 * k, 500.0 + k, sensor_msgs::NavSatStatus::STATUS_FIX));
+  }
+  fix_pub.publish(fix(1009.9, 10.0, 10.0, 0.0, sensor_msgs::NavSatStatus::STATUS_NO_FIX));  // ignored
+  ASSERT_TRUE(waitFor([&] { return diagnostics.number("fixes received") == 5; }, 20.0))
+      << "fixes received: " << diagnostics.value("fixes received");
+
+  // Frames (tolerance 0.5 s): 1000.1 -> fix 0, 1000.9 -> fix 1, 1002.2 -> fix 2, 1003.5 -> halfway, the later
+  // fix 4, 1010.0 -> none within 0.5 s (the NO_FIX message does not count).
+  const std::vector<double> stamps = {1000.1, 1000.9, 1002.2, 1003.5, 1010.0};
+  for (size_t i = 0; i < stamps.size(); ++i)
+  {
+    pub.publish(openable_ros_test::toMsg(gardensPoint(dir, int(i)), enc::BGR8, ros::Time(stamps[i]), "camera"));
+  }
+  ASSERT_TRUE(waitFor([&] { return diagnostics.number("frames received") == 5; }, 20.0));
+  ASSERT_TRUE(waitFor([&] { return diagnostics.number("frames with a fix") == 4; }, 10.0))
+      << "frames with a fix: " << diagnostics.value("frames with a fix");
+
+  // ~geo_file, read by the KML export's own reader.
+  const std::map<int, openable::GeoPosition> positions = openable::loadGeoPositions(geo_file);
+  ASSERT_EQ(positions.size(), 4u);
+  const int first = positions.begin()->first;
+  const std::vector<int> fix_of_frame = {0, 1, 2, 4};
+  for (int f = 0; f < 4; ++f)
+  {
+    ASSERT_EQ(positions.count(first + f), 1u) << "frame " << first + f;
+    const openable::GeoPosition& p = positions.at(first + f);
+    const int k = fix_of_frame[size_t(f)];
+    EXPECT_NEAR(p.latitude, 48.0 + 0.001 * k, 1e-9) << "frame " << f;
+    EXPECT_NEAR(p.longitude, 11.0 + 0.001 * k, 1e-9) << "frame " << f;
+    EXPECT_NEAR(p.altitude, 500.0 + k, 1e-3) << "frame " << f;
+    EXPECT_NEAR(p.stamp, 1000.0 + k, 1e-6) << "frame " << f;
+  }
+  EXPECT_EQ(positions.count(first + 4), 0u) << "the frame without a fix within 0.5 s got one";
+
+  // The KML of that path with one loop (frame 3 back to frame 0): the path and the loop's placemark.
+  const std::string kml = openable::trajectoryKml(positions, {{first + 3, first, true}}, "navsat");
+  size_t placemarks = 0;
+  for (size_t at = kml.find("<Placemark>"); at != std::string::npos; at = kml.find("<Placemark>", at + 1))
+  {
+    ++placemarks;
+  }
+  EXPECT_EQ(placemarks, 2u) << kml;
+  EXPECT_NE(kml.find("11.004000000,48.004000000"), std::string::npos) << kml;
+}
+
+TEST(DetectorPaths, SimTimeGuardDeletesUseSimTimeWhenStopped)
+{
+  // replay.launch's guard: started with /use_sim_time true, stopped as roslaunch stops nodes (SIGINT).
+  ros::param::set("/use_sim_time", true);
+  const pid_t guard = fork();
+  ASSERT_GE(guard, 0);
+  if (guard == 0)
+  {
+    execl(SIM_TIME_GUARD_BINARY, SIM_TIME_GUARD_BINARY, "__name:=sim_time_guard_under_test", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  const auto registered = []
+  {
+    std::vector<std::string> nodes;
+    ros::master::getNodes(nodes);
+    return std::find(nodes.begin(), nodes.end(), "/sim_time_guard_under_test") != nodes.end();
+  };
+  ASSERT_TRUE(waitFor(registered, 30.0)) << "sim_time_guard did not start";
+  EXPECT_TRUE(ros::param::has("/use_sim_time")) << "deleted while the launch still runs";
+  ASSERT_EQ(kill(guard, SIGINT), 0);
+  int status = -1;
+  ASSERT_TRUE(waitFor([&] { return waitpid(guard, &status, WNOHANG) == guard; }, 20.0)) << "did not stop on SIGINT";
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  EXPECT_FALSE(ros::param::has("/use_sim_time")) << "/use_sim_time outlived the launch";
 }
 
 int main(int argc, char** argv)

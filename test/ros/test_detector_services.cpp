@@ -136,6 +136,8 @@ TEST_F(DetectorServices, BadInputIsSkippedAndTheNodeKeepsRunning)
   publishDay(10, 5);
   EXPECT_TRUE(waitForValue("history size", 15));
   EXPECT_EQ(diagnostics_->number("frames stored"), 15);
+  // Issue 9 item 8: rejected frames are received frames too (10 + 3 bad + 1 backwards + 5).
+  EXPECT_TRUE(waitForValue("frames received", 19)) << diagnostics_->value("frames received");
 }
 
 TEST_F(DetectorServices, SaveLoadResetRoundTripAndBadMapsAreRefused)
@@ -231,6 +233,15 @@ TEST_F(DetectorServices, SaveLoadResetRoundTripAndBadMapsAreRefused)
   }
   // The map is not modified by localising.
   EXPECT_EQ(diagnostics_->number("history size"), 40);
+  // Issue 9 item 10: ~reset leaves the map: back to loop-closure mode with an empty history, no restart.
+  ros::ServiceClient leave = nh_.serviceClient<std_srvs::Trigger>(detector_ + "/reset");
+  std_srvs::Trigger unload;
+  ASSERT_TRUE(leave.call(unload));
+  EXPECT_TRUE(unload.response.success);
+  EXPECT_NE(unload.response.message.find("unloaded"), std::string::npos) << unload.response.message;
+  ASSERT_TRUE(waitFor([&] { return diagnostics_->value("mode").find("loop closure") == 0; }, 10.0))
+      << diagnostics_->value("mode");
+  EXPECT_TRUE(waitForValue("history size", 0));
   std::remove(map_path.c_str());
   std::remove(corrupt_path.c_str());
   std::remove((map_path + ".other").c_str());
@@ -279,6 +290,38 @@ TEST_F(DetectorServices, DynamicReconfigureChangesMatchingLiveAndRevertsRefusedV
   EXPECT_DOUBLE_EQ(find(setDouble("threshold", -0.5), "threshold"), 0.05);
   ros::WallDuration(0.5).sleep();
   EXPECT_EQ(diagnostics_->value("threshold"), "0.05");
+
+  // Outside the table's range: refused, never clamped (dynamic_reconfigure used to turn 5 into 1.0, which
+  // accepts everything), and the server reports the value in force.
+  EXPECT_DOUBLE_EQ(find(setDouble("threshold", 5.0), "threshold"), 0.05);
+  EXPECT_DOUBLE_EQ(find(setDouble("exclusion_seconds", -3.0), "exclusion_seconds"), 0.0);
+  EXPECT_DOUBLE_EQ(find(setDouble("matrix_rate", 1000.0), "matrix_rate"), 2.0);
+  {
+    // One refused key in a request does not hold back the others.
+    dynamic_reconfigure::Reconfigure both;
+    dynamic_reconfigure::DoubleParameter threshold;
+    threshold.name = "threshold";
+    threshold.value = 5.0;
+    both.request.config.doubles.push_back(threshold);
+    dynamic_reconfigure::IntParameter size;
+    size.name = "matrix_size";
+    size.value = 5;  // below 16
+    both.request.config.ints.push_back(size);
+    length.value = 5;
+    both.request.config.ints.push_back(length);
+    ASSERT_TRUE(client.call(both));
+    EXPECT_DOUBLE_EQ(find(both.response.config, "threshold"), 0.05);
+    int shown_length = -1, shown_size = -1;
+    for (const auto& i : both.response.config.ints)
+    {
+      shown_length = i.name == "sequence_length" ? i.value : shown_length;
+      shown_size = i.name == "matrix_size" ? i.value : shown_size;
+    }
+    EXPECT_EQ(shown_length, 5);
+    EXPECT_EQ(shown_size, 512);
+    EXPECT_TRUE(waitFor([&] { return diagnostics_->number("sequence length") == 5; }, 10.0));
+    EXPECT_EQ(diagnostics_->value("threshold"), "0.05");
+  }
 
   // Back to the test configuration.
   setDouble("threshold", 0.1);

@@ -11,6 +11,9 @@
 #include "openable/config.h"
 #include "openable_ros/DetectorConfig.h"
 #include "openable_ros/conversions.h"
+#include "openable_ros/fix_history.h"
+#include "openable_ros/params.h"
+#include "openable_ros/sequence_gaps.h"
 #include "openable_ros/live_reconfigure.h"
 #include "openable_ros/ros_parameters.h"
 
@@ -177,5 +180,118 @@ TEST(Conversions, Mono16InEitherByteOrderKeepsItsTopByte)
     std::string error;
     ASSERT_TRUE(openable_ros::toCoreImage(msg, out, error)) << error;
     EXPECT_EQ(out.at<uint8_t>(2, 3), 0x12) << (big_endian ? "big" : "little") << "-endian";
+  }
+}
+
+TEST(SequenceGaps, CountsTheNumbersThatNeverArrivedAndNothingElse)
+{
+  openable_ros::SequenceGaps gaps;
+  gaps.note(0, 10);  // the first message: nothing before it can be seen
+  EXPECT_EQ(gaps.lost(), 0u);
+  gaps.note(0, 11);
+  gaps.note(0, 14);  // 12 and 13 were sent and dropped
+  EXPECT_EQ(gaps.lost(), 2u);
+  gaps.note(0, 3);  // the publisher restarted: counting goes on from 3
+  gaps.note(0, 3);  // a publisher that does not number (seq stays): nothing
+  gaps.note(0, 5);
+  EXPECT_EQ(gaps.lost(), 3u);
+  // A stereo pair lost shows in both inputs: the frames lost are the larger count, not the sum.
+  gaps.note(1, 0);
+  gaps.note(1, 3);
+  EXPECT_EQ(gaps.lost(), 3u);  // input 0: 3, input 1: 2
+  gaps.note(1, 5);
+  EXPECT_EQ(gaps.lost(), 3u);  // both 3
+  gaps.note(1, 7);
+  EXPECT_EQ(gaps.lost(), 4u);
+  // Wrap-around of the 32-bit counter is a step back, not four billion lost frames.
+  gaps.note(0, 4294967295u);
+  const uint64_t before = gaps.lost();
+  gaps.note(0, 0);
+  EXPECT_EQ(gaps.lost(), before);
+}
+
+TEST(FixHistory, NearestFixWithinTheTolerance)
+{
+  openable_ros::FixHistory fixes;
+  openable::GeoPosition found;
+  EXPECT_FALSE(fixes.nearest(10.0, 1.0, found));
+  for (int k = 0; k < 3; ++k)
+  {
+    openable::GeoPosition f;
+    f.latitude = k;
+    f.stamp = 10.0 + k;
+    fixes.add(f);
+  }
+  ASSERT_TRUE(fixes.nearest(10.9, 0.5, found));
+  EXPECT_EQ(found.latitude, 1.0);
+  ASSERT_TRUE(fixes.nearest(11.5, 0.5, found));  // halfway: the later fix
+  EXPECT_EQ(found.latitude, 2.0);
+  EXPECT_FALSE(fixes.nearest(13.6, 0.5, found));  // the last fix is too old
+  EXPECT_FALSE(fixes.nearest(9.0, 0.5, found));
+  // Bounded: the oldest fixes leave.
+  for (size_t k = 0; k < openable_ros::FixHistory::kCapacity; ++k)
+  {
+    openable::GeoPosition f;
+    f.stamp = 100.0 + double(k);
+    fixes.add(f);
+  }
+  EXPECT_FALSE(fixes.nearest(10.0, 0.5, found));
+  fixes.clear();
+  EXPECT_FALSE(fixes.nearest(100.0, 0.5, found));
+}
+
+TEST(RosParameters, ValuesFromOutsideTheParameterServerAreCheckedAgainstTheTable)
+{
+  EXPECT_EQ(openable_ros::rosParameterProblem("matrix_size", "512"), "");
+  EXPECT_EQ(openable_ros::rosParameterProblem("matrix_size", "5"),
+            "~matrix_size: value '5' is not allowed; expected an integer in [16, 4096] (pixels)");
+  EXPECT_NE(openable_ros::rosParameterProblem("matrix_rate", "nan"), "");
+  EXPECT_NE(openable_ros::rosParameterProblem("matrix_mode", "bogus"), "");
+  EXPECT_EQ(openable_ros::rosParameterProblem("matrix_mode", "rolling_window"), "");
+}
+
+TEST(LiveReconfigure, OutOfRangeKeysFallBackOneByOne)
+{
+  openable::Config in_force;
+  in_force.threshold = 0.05;
+  openable::Config requested = in_force;
+  requested.threshold = 5.0;
+  requested.sequence_length = 4;
+  std::vector<std::string> messages;
+  ASSERT_TRUE(openable_ros::fallBackKeyByKey(requested, in_force, "keeping", "the previous values", messages));
+  EXPECT_EQ(requested.threshold, 0.05);
+  EXPECT_EQ(requested.sequence_length, 4);
+  ASSERT_EQ(messages.size(), 1u);
+  EXPECT_EQ(messages[0], "~threshold: value '5' is not allowed; expected -1 (off) or a number in [0, 1]; keeping "
+                         "threshold = 0.05");
+}
+
+TEST(LaunchFiles, OnlyTrulyRequiredArgumentsAreListedAsRequired)
+{
+  // roslaunch --ros-args lists an argument whose default is "" under "Required Arguments", so a newcomer
+  // believed fixed_frame, map_file and manager had to be given. Only replay.launch's bag has no default.
+  for (const std::string name : {"mono", "stereo", "panoramic", "kitti", "replay"})
+  {
+    // The package found at its source, whether or not a workspace's setup was sourced.
+    const std::string source = OPENABLE_SOURCE_DIR;
+    const std::string command = "ROS_PACKAGE_PATH=" + source + ":$ROS_PACKAGE_PATH roslaunch --ros-args " + source +
+                                "/launch/" + name + ".launch 2>&1";
+    FILE* pipe = popen(command.c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string out;
+    char buffer[4096];
+    for (size_t n; (n = fread(buffer, 1, sizeof(buffer), pipe)) > 0;)
+      out.append(buffer, n);
+    ASSERT_EQ(pclose(pipe), 0) << command << "\n" << out;
+    ASSERT_NE(out.find("Optional Arguments:"), std::string::npos) << out;
+    const size_t required = out.find("Required Arguments:");
+    if (name != "replay")
+    {
+      EXPECT_EQ(required, std::string::npos) << name << ".launch:\n" << out;
+      continue;
+    }
+    ASSERT_NE(required, std::string::npos) << out;
+    const std::string listed = out.substr(required, out.find("Optional Arguments:") - required);
+    EXPECT_EQ(listed, "Required Arguments:\n  bag: absolute path of the bag\n") << out;
   }
 }

@@ -250,3 +250,30 @@ TEST(OfflineTool, CameraInfoErrorsNameTheFileAndKey)
   }
   EXPECT_FALSE(fs::exists(out + "/loop_closures.csv"));
 }
+
+TEST(OfflineTool, QuietSilencesProgressAndInputSummaryButNotTheResults)
+{
+  // Issue 13: progress on stderr during long runs, silenced by --quiet; the results are the same.
+  const std::string base = "--config " + config() + " --reference " +
+                           openable_test::sharedData("gardens_point/day_right") + " --output ";
+  const std::string loud_dir = freshDir("loud");
+  const std::string quiet_dir = freshDir("quiet");
+  const Result loud = run(base + loud_dir);
+  const Result quiet = run(base + quiet_dir + " --quiet");
+  ASSERT_EQ(loud.exit_code, 0) << loud.output;
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+  // Not a terminal here: plain progress lines ("openable_offline: 200/200 frames (100%), ... frames/s").
+  EXPECT_NE(loud.output.find("/200 frames"), std::string::npos) << loud.output;
+  EXPECT_NE(loud.output.find("reading "), std::string::npos) << loud.output;
+  EXPECT_EQ(quiet.output.find("/200 frames"), std::string::npos) << quiet.output;
+  EXPECT_EQ(quiet.output.find("frames/s"), std::string::npos) << quiet.output;
+  EXPECT_EQ(quiet.output.find("reading "), std::string::npos) << quiet.output;
+  EXPECT_NE(quiet.output.find("wrote: "), std::string::npos) << quiet.output;
+  std::ifstream a(loud_dir + "/loop_closures.csv"), b(quiet_dir + "/loop_closures.csv");
+  const std::string loud_csv((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
+  const std::string quiet_csv((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+  EXPECT_FALSE(loud_csv.empty());
+  EXPECT_EQ(loud_csv, quiet_csv);
+  fs::remove_all(loud_dir);
+  fs::remove_all(quiet_dir);
+}
