@@ -58,7 +58,9 @@ std::vector<std::string> Config::validate() const
       continue;
     const std::string text = k.get(*this);
     const double value = std::strtod(text.c_str(), nullptr);
-    if (value >= k.key.min && value <= k.key.max)  // false for NaN too
+    const bool above_min = k.key.min_exclusive ? value > k.key.min : value >= k.key.min;
+    const bool below_max = k.key.max_exclusive ? value < k.key.max : value <= k.key.max;
+    if (above_min && below_max)  // false for NaN too
       continue;
     if (k.key.type == "int")
       bad(k.key.name, text,
@@ -66,7 +68,9 @@ std::vector<std::string> Config::validate() const
     else if (k.key.name == "threshold")
       bad(k.key.name, text, "-1 (off) or a number in [0, 1]");
     else
-      bad(k.key.name, text, "a number in [" + formatDouble(k.key.min) + ", " + formatDouble(k.key.max) + "]");
+      bad(k.key.name, text,
+          std::string("a number in ") + (k.key.min_exclusive ? "(" : "[") + formatDouble(k.key.min) + ", " +
+              formatDouble(k.key.max) + (k.key.max_exclusive ? ")" : "]"));
   }
 
   // Rules beyond a range.
@@ -108,6 +112,11 @@ std::vector<std::string> Config::validate() const
     bad("stereo_block_size", std::to_string(stereo_block_size), "an odd integer in [1, 31]");
   if (display_normalization != "max" && display_normalization != "minmax")
     bad("display_normalization", display_normalization, "max | minmax");
+  // Both keys named, so a ROS parameter reader falls back on both (either one alone could still break it).
+  if (!(verify_stereo_min_disparity_px < verify_stereo_max_disparity_px))
+    bad("verify_stereo_min_disparity_px/verify_stereo_max_disparity_px",
+        formatDouble(verify_stereo_min_disparity_px) + " / " + formatDouble(verify_stereo_max_disparity_px),
+        "the smallest disparity below the largest");
   return errors;
 }
 

@@ -163,6 +163,35 @@ const std::vector<KeyAccess>& table()
               "distance matrix colour map 0..11 (AUTUMN BONE JET WINTER RAINBOW OCEAN SUMMER SPRING "
               "COOL HSV PINK HOT)",
               &Config::color_map).range(0, 11).live(),
+      // Geometric verification. Low ends as VerifierParams::validate() has them; the high ends are sanity
+      // bounds of this table (VerifierParams has none). Not live: the verifier is built once, with the camera.
+      makeKey("verify_max_features", "ORB features per frame (the bound on per-frame memory)",
+              &Config::verify_max_features).range(50, 100000),
+      makeKey("verify_ratio", "Lowe ratio test: best / second-best Hamming distance must be below this",
+              &Config::verify_ratio).range(0, 1).aboveMin(),
+      makeKey("verify_max_hamming", "a feature match with more differing bits (of 256) is discarded (bits)",
+              &Config::verify_max_hamming).range(1, 256),
+      makeKey("verify_min_inliers", "fewer RANSAC inliers (or ratio-test matches, or keypoints): rejected",
+              &Config::verify_min_inliers).range(8, 100000),
+      makeKey("verify_ransac_threshold_px", "inlier threshold: reprojection (stereo PnP) or Sampson (mono) error (pixels)",
+              &Config::verify_ransac_threshold_px).range(0, 100).aboveMin(),
+      makeKey("verify_ransac_confidence", "RANSAC confidence", &Config::verify_ransac_confidence)
+          .range(0, 1).aboveMin().belowMax(),
+      makeKey("verify_ransac_iterations", "PnP RANSAC iterations", &Config::verify_ransac_iterations).range(10, 1000000),
+      makeKey("verify_min_parallax_deg", "mono: less median parallax after derotation is pure rotation (degrees)",
+              &Config::verify_min_parallax_deg).range(0, 180),
+      makeKey("verify_identical_max_flow_px", "less median motion of the matches is the same image twice (pixels)",
+              &Config::verify_identical_max_flow_px).range(0, 1000),
+      makeKey("verify_stereo_max_row_diff_px", "stereo depth: |y_left - y_right| allowed at octave 0 (pixels)",
+              &Config::verify_stereo_max_row_diff_px).range(0, 100).aboveMin(),
+      makeKey("verify_stereo_min_disparity_px", "stereo depth: a smaller disparity (too far) gives no depth (pixels)",
+              &Config::verify_stereo_min_disparity_px).range(0, 10000).aboveMin(),
+      makeKey("verify_stereo_max_disparity_px", "stereo depth: a larger disparity gives no depth (pixels)",
+              &Config::verify_stereo_max_disparity_px).range(0, 10000).aboveMin(),
+      makeKey("verify_stereo_max_hamming", "stereo depth: left/right descriptor distance allowed (bits)",
+              &Config::verify_stereo_max_hamming).range(1, 256),
+      makeKey("verify_min_stereo_points", "stereo: fewer match-frame keypoints with depth: rejected",
+              &Config::verify_min_stereo_points).range(4, 100000),
   };
   return keys;
 }

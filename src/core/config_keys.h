@@ -27,6 +27,18 @@ struct KeyAccess
     key.has_range = true;
     return *this;
   }
+  /// The range's low end itself is not allowed: (low, high].
+  KeyAccess aboveMin()
+  {
+    key.min_exclusive = true;
+    return *this;
+  }
+  /// The range's high end itself is not allowed: [low, high).
+  KeyAccess belowMax()
+  {
+    key.max_exclusive = true;
+    return *this;
+  }
   KeyAccess live()
   {
     key.live = true;
