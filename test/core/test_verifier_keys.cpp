@@ -17,6 +17,7 @@
 #include "openable/online_detector.h"
 #include "openable/place_database.h"
 #include "openable/reference_map.h"
+#include "openable/session_map.h"
 
 using namespace openable;
 
@@ -224,6 +225,13 @@ TEST(VerifierKeys, OnlineDetectorBuildsItsVerifierFromTheConfig)
   Config live = config;
   live.threshold = 0.2;
   EXPECT_NO_THROW(detector.updateConfig(live));
+}
+
+TEST(VerifierKeys, DescriptorHashIgnoresThem)
+{
+  // They do not change what is stored: descriptors sent with another verifier are still comparable.
+  EXPECT_EQ(descriptorHash(nonDefaultVerifier()), descriptorHash(Config()));
+  EXPECT_TRUE(descriptorDifferences(nonDefaultVerifier(), Config()).empty());
 }
 
 TEST(VerifierKeys, MapsAreCompatibleWhateverTheVerifierKeys)
