@@ -57,6 +57,24 @@ struct Config
   std::string display_normalization = "minmax";  ///< distance matrix images: max (paper Eq. 5) | minmax (stretch)
   int color_map = 7;  ///< OpenABLE's 12 colour maps (0..11, OpenCV COLORMAP_AUTUMN .. COLORMAP_HOT)
 
+  // Geometric verification (~verify / openable_offline --camera-info): the GeometricVerifier's tunables,
+  // VerifierParams field by field (verifierParams() in geometric_verifier.h; the defaults are its defaults).
+  // They neither change the descriptors nor can change live.
+  int verify_max_features = 1000;                 ///< ORB features per frame
+  double verify_ratio = 0.8;                      ///< Lowe ratio: best / second-best Hamming distance below this
+  int verify_max_hamming = 64;                    ///< a feature match with more differing bits (of 256) is discarded
+  int verify_min_inliers = 15;                    ///< fewer RANSAC inliers (or matches, or keypoints): rejected
+  double verify_ransac_threshold_px = 2.0;        ///< inlier threshold: reprojection (stereo) or Sampson (mono) error
+  double verify_ransac_confidence = 0.999;        ///< RANSAC confidence
+  int verify_ransac_iterations = 2000;            ///< PnP RANSAC iterations
+  double verify_min_parallax_deg = 2.0;           ///< mono: less median parallax is pure rotation (rejected)
+  double verify_identical_max_flow_px = 0.5;      ///< less median inlier motion is the same image twice (rejected)
+  double verify_stereo_max_row_diff_px = 2.0;     ///< stereo depth: |y_left - y_right| allowed at octave 0
+  double verify_stereo_min_disparity_px = 1.0;    ///< stereo depth: smaller disparity (too far) gives no depth
+  double verify_stereo_max_disparity_px = 160.0;  ///< stereo depth: larger disparity gives no depth
+  int verify_stereo_max_hamming = 50;             ///< stereo depth: left/right descriptor distance allowed
+  int verify_min_stereo_points = 30;              ///< stereo: fewer match-frame keypoints with depth: rejected
+
   /// Errors of the form "key: value 'x' is not allowed; expected ...". Empty when valid. Besides each
   /// key's range, refuses combinations whose images need more than kMaxWorkingBytesPerFrame per frame.
   std::vector<std::string> validate() const;
@@ -90,11 +108,13 @@ struct Config
     std::string name;
     std::string type;  ///< bool | int | double | string
     std::string description;
-    double min = 0.0;        ///< numbers: smallest allowed value (with has_range)
-    double max = 0.0;        ///< numbers: largest allowed value (with has_range)
-    bool has_range = false;  ///< min/max hold (further rules, e.g. threshold's -1, are in validate())
-    bool live = false;       ///< can change while running (LoopDetector::updateMatching, dynamic_reconfigure)
-    bool describes = false;  ///< changes the descriptors: a map built with another value is incompatible
+    double min = 0.0;            ///< numbers: smallest allowed value (with has_range)
+    double max = 0.0;            ///< numbers: largest allowed value (with has_range)
+    bool has_range = false;      ///< min/max hold (further rules, e.g. threshold's -1, are in validate())
+    bool min_exclusive = false;  ///< with has_range: min itself is not allowed, (min, max]
+    bool max_exclusive = false;  ///< with has_range: max itself is not allowed, [min, max)
+    bool live = false;           ///< can change while running (LoopDetector::updateMatching, dynamic_reconfigure)
+    bool describes = false;      ///< changes the descriptors: a map built with another value is incompatible
   };
   /// Every key, in documentation order.
   static const std::vector<Key>& keys();

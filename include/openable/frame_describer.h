@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "openable/config.h"
-#include "openable/descriptor.h"
+#include "openable/descriptor_extractor.h"
 #include "openable/preprocessor.h"
 
 namespace openable

@@ -8,6 +8,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "openable/config.h"
+
 namespace openable
 {
 /// A rectified pinhole camera (no distortion: images must be rectified, e.g. `image_rect`). A positive
@@ -38,7 +40,8 @@ struct PinholeCamera
   static PinholeCamera fromProjection(const cv::Matx34d& left, const cv::Matx34d& right = cv::Matx34d::zeros());
 };
 
-/// Every tunable of the verification, with the defaults used by the nodelets.
+/// Every tunable of the verification. The defaults are those of Config's verify_* keys (tested), which is
+/// how the nodelets and openable_offline set them.
 struct VerifierParams
 {
   int max_features = 1000;           ///< ORB features per frame (the bound on per-frame memory)
@@ -66,6 +69,10 @@ struct VerifierParams
   /// Human-readable errors ("name: value x, expected ..."); empty when valid.
   std::vector<std::string> validate() const;
 };
+
+/// The configuration's verify_* keys as the verifier's parameters (verify_min_inliers -> min_inliers, ...).
+/// The one way from YAML, --set or a ROS parameter to the verifier.
+VerifierParams verifierParams(const Config& config);
 
 /// The features of one frame, as kept for history frames.
 struct FrameFeatures

@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 
-#include "openable/descriptor.h"
+#include "openable/descriptor_extractor.h"
 
 namespace openable
 {

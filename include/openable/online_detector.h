@@ -42,7 +42,7 @@ struct OnlineOptions
   double keyframe_angle = 0.0;     ///< radians the camera must turn before a frame is stored (0 = off)
   bool verify = false;             ///< geometric verification of candidates (needs setCamera())
   bool verify_required = true;     ///< true: a candidate that cannot be verified is not published (Unverified)
-  VerifierParams verifier;
+                                   ///< (the verifier's tunables are the configuration's verify_* keys)
   size_t feature_bytes = 256u << 20;  ///< memory bound of the features kept for verification
 };
 
@@ -117,6 +117,7 @@ public:
   }
 
   /// New values of the keys that can change live (LoopDetector::updateMatching plus the decision keys).
+  /// Throws Error, changing nothing, when a verify_* key differs (the verifier is built once, in setCamera).
   void updateConfig(const Config& config);
   /// Forgets the stream (and, in loop-closure mode, the history and stored features).
   void reset();

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "openable/config.h"
-#include "openable/descriptor.h"
+#include "openable/descriptor_extractor.h"
 
 namespace openable
 {

@@ -8,210 +8,19 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <functional>
-#include <sstream>
 
-#include "openable/descriptor.h"
+#include "config_keys.h"
+#include "openable/descriptor_extractor.h"
 #include "openable/error.h"
 
 namespace openable
 {
+using config_keys::formatDouble;
+using config_keys::table;
+using config_keys::trim;
+
 namespace
 {
-/// One row per key: how to read and write it. Keeping every key in one table means YAML, --set, ROS
-/// parameters and the documentation can never disagree about names or types.
-struct KeyAccess
-{
-  Config::Key key;
-  std::function<void(Config&, const std::string&)> set;
-  std::function<std::string(const Config&)> get;
-
-  KeyAccess range(double low, double high)
-  {
-    key.min = low;
-    key.max = high;
-    key.has_range = true;
-    return *this;
-  }
-  KeyAccess live()
-  {
-    key.live = true;
-    return *this;
-  }
-  KeyAccess describes()
-  {
-    key.describes = true;
-    return *this;
-  }
-};
-
-std::string trim(const std::string& s)
-{
-  const auto begin = s.find_first_not_of(" \t\r\n");
-  if (begin == std::string::npos)
-    return "";
-  const auto end = s.find_last_not_of(" \t\r\n");
-  return s.substr(begin, end - begin + 1);
-}
-
-int parseInt(const std::string& key, const std::string& text)
-{
-  try
-  {
-    size_t used = 0;
-    const long value = std::stol(trim(text), &used);
-    if (used == trim(text).size() && value >= INT32_MIN && value <= INT32_MAX)
-      return static_cast<int>(value);
-  }
-  catch (const std::exception&)
-  {
-  }
-  throw Error(key + ": '" + text + "' is not an integer");
-}
-
-double parseDouble(const std::string& key, const std::string& text)
-{
-  try
-  {
-    size_t used = 0;
-    const double value = std::stod(trim(text), &used);
-    if (used == trim(text).size())
-      return value;
-  }
-  catch (const std::exception&)
-  {
-  }
-  throw Error(key + ": '" + text + "' is not a number");
-}
-
-bool parseBool(const std::string& key, const std::string& text)
-{
-  const std::string t = trim(text);
-  if (t == "true" || t == "True" || t == "TRUE" || t == "1" || t == "yes" || t == "on")
-    return true;
-  if (t == "false" || t == "False" || t == "FALSE" || t == "0" || t == "no" || t == "off")
-    return false;
-  throw Error(key + ": '" + text + "' is not a boolean (true / false)");
-}
-
-std::string formatDouble(double v)
-{
-  std::ostringstream out;
-  out.precision(17);
-  out << v;
-  return out.str();
-}
-
-template <typename T>
-KeyAccess makeKey(const char* name, const char* description, T Config::*member);
-
-template <>
-KeyAccess makeKey<int>(const char* name, const char* description, int Config::*member)
-{
-  return {{name, "int", description},
-          [name, member](Config& c, const std::string& v) { c.*member = parseInt(name, v); },
-          [member](const Config& c) { return std::to_string(c.*member); }};
-}
-
-template <>
-KeyAccess makeKey<double>(const char* name, const char* description, double Config::*member)
-{
-  return {{name, "double", description},
-          [name, member](Config& c, const std::string& v) { c.*member = parseDouble(name, v); },
-          [member](const Config& c) { return formatDouble(c.*member); }};
-}
-
-template <>
-KeyAccess makeKey<bool>(const char* name, const char* description, bool Config::*member)
-{
-  return {{name, "bool", description},
-          [name, member](Config& c, const std::string& v) { c.*member = parseBool(name, v); },
-          [member](const Config& c) { return std::string(c.*member ? "true" : "false"); }};
-}
-
-template <>
-KeyAccess makeKey<std::string>(const char* name, const char* description, std::string Config::*member)
-{
-  return {{name, "string", description},
-          [member](Config& c, const std::string& v) { c.*member = trim(v); },
-          [member](const Config& c) { return c.*member; }};
-}
-
-const std::vector<KeyAccess>& table()
-{
-  static const std::vector<KeyAccess> keys = {
-      makeKey("camera_type", "mono | stereo | panoramic", &Config::camera_type).describes(),
-      makeKey("description_type", "global (one descriptor per image) | grid (grid_x x grid_y cells)",
-              &Config::description_type).describes(),
-      makeKey("patch_size", "side of the square patch every cell is downsampled to (pixels)", &Config::patch_size).range(8, 1024).describes(),
-      makeKey("grid_x", "cells across, description_type grid", &Config::grid_x).range(1, 64).describes(),
-      makeKey("grid_y", "cells down, description_type grid", &Config::grid_y).range(1, 64).describes(),
-      makeKey("panoramas", "vertical sub-panoramas per panorama, camera_type panoramic", &Config::panoramas).range(1, 64).describes(),
-      makeKey("illumination_invariance", "apply paper Eq. 6 before description (colour input)",
-              &Config::illumination_invariance).describes(),
-      makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha).range(0, 1).describes(),
-      makeKey("patch_normalization", "block side (pixels of the patch) for local contrast normalisation; 0 = off",
-              &Config::patch_normalization).range(0, 1024).describes(),
-      makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG", &Config::descriptor).describes(),
-      makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length).range(1, 10000).live(),
-      makeKey("min_sequence_length",
-              "sequences of fewer frames are never candidates; 0 = only full sequences of "
-              "sequence_length frames (1 = any, the mean of the available terms)",
-              &Config::min_sequence_length).range(0, 10000).live(),
-      makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = no distance gate",
-              &Config::threshold).range(-1, 1).live(),
-      makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
-              &Config::exclusion_window).range(0, 100000000).live(),
-      makeKey("top_k", "candidates reported per frame", &Config::top_k).range(1, 1000).live(),
-      makeKey("min_uniqueness", "accept only when 1 - best / second best >= this (0 = off)", &Config::min_uniqueness).range(0, 1).live(),
-      makeKey("uniqueness_window", "frames around the best match skipped when finding the second best (frames)",
-              &Config::uniqueness_window).range(0, 100000).live(),
-      makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional).live(),
-      makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history).range(0, 100000000),
-      makeKey("min_candidates",
-              "loop-closure decision: fewer full-sequence candidate places than this is 'too early' (frames)",
-              &Config::min_candidates).range(0, 100000000).live(),
-      makeKey("consistent_frames",
-              "loop-closure decision: consecutive frames that must pass the gates with matches advancing "
-              "together (1 = off)",
-              &Config::consistent_frames).range(1, 1000).live(),
-      makeKey("consistency_tolerance",
-              "loop-closure decision: frames a match may deviate from advancing one place per frame",
-              &Config::consistency_tolerance).range(0, 1000).live(),
-      makeKey("exclusion_seconds",
-              "loop-closure mode: frames stamped less than this before the query are never matched (s; 0 = off)",
-              &Config::exclusion_seconds).range(0, 1e9).live(),
-      makeKey("stereo_num_disparities", "SGBM disparity range at 640 px width (pixels)",
-              &Config::stereo_num_disparities).range(16, 1024).describes(),
-      makeKey("stereo_block_size", "SGBM block size (odd, pixels)", &Config::stereo_block_size).range(1, 31).describes(),
-      makeKey("display_normalization",
-              "distance matrix images: max (paper Eq. 5, M / max M) | minmax (contrast "
-              "stretch)",
-              &Config::display_normalization),
-      makeKey("color_map",
-              "distance matrix colour map 0..11 (AUTUMN BONE JET WINTER RAINBOW OCEAN SUMMER SPRING "
-              "COOL HSV PINK HOT)",
-              &Config::color_map).range(0, 11).live(),
-  };
-  return keys;
-}
-
-const KeyAccess& find(const std::string& key)
-{
-  for (const auto& k : table())
-    if (k.key.name == key)
-      return k;
-  std::string known;
-  std::vector<std::string> names;
-  for (const auto& k : table())
-  {
-    known += (known.empty() ? "" : ", ") + k.key.name;
-    names.push_back(k.key.name);
-  }
-  throw Error("unknown configuration key '" + key + "' (did you mean '" + closestName(key, names) +
-              "'?); known keys: " + known);
-}
-
 /// A configuration file is a few kilobytes; anything much larger is not one (or is a device).
 constexpr size_t kMaxConfigFileBytes = 1 << 20;
 
@@ -231,54 +40,6 @@ std::string oneOf(const std::vector<std::string>& values)
 
 }  // namespace
 
-const std::vector<Config::Key>& Config::keys()
-{
-  static const std::vector<Key> keys = []
-  {
-    std::vector<Key> out;
-    for (const auto& k : table())
-      out.push_back(k.key);
-    return out;
-  }();
-  return keys;
-}
-
-const std::vector<std::string>& Config::descriptorKeys()
-{
-  static const std::vector<std::string> keys = []
-  {
-    std::vector<std::string> out;
-    for (const auto& k : table())
-      if (k.key.describes)
-        out.push_back(k.key.name);
-    return out;
-  }();
-  return keys;
-}
-
-const std::vector<std::string>& Config::liveKeys()
-{
-  static const std::vector<std::string> keys = []
-  {
-    std::vector<std::string> out;
-    for (const auto& k : table())
-      if (k.key.live)
-        out.push_back(k.key.name);
-    return out;
-  }();
-  return keys;
-}
-
-void Config::set(const std::string& key, const std::string& value)
-{
-  find(key).set(*this, value);
-}
-
-std::string Config::get(const std::string& key) const
-{
-  return find(key).get(*this);
-}
-
 bool Config::isBinaryDescriptor() const
 {
   return !(descriptor == "SIFT" || descriptor == "SURF" || descriptor == "HOG");
@@ -297,7 +58,9 @@ std::vector<std::string> Config::validate() const
       continue;
     const std::string text = k.get(*this);
     const double value = std::strtod(text.c_str(), nullptr);
-    if (value >= k.key.min && value <= k.key.max)  // false for NaN too
+    const bool above_min = k.key.min_exclusive ? value > k.key.min : value >= k.key.min;
+    const bool below_max = k.key.max_exclusive ? value < k.key.max : value <= k.key.max;
+    if (above_min && below_max)  // false for NaN too
       continue;
     if (k.key.type == "int")
       bad(k.key.name, text,
@@ -305,7 +68,9 @@ std::vector<std::string> Config::validate() const
     else if (k.key.name == "threshold")
       bad(k.key.name, text, "-1 (off) or a number in [0, 1]");
     else
-      bad(k.key.name, text, "a number in [" + formatDouble(k.key.min) + ", " + formatDouble(k.key.max) + "]");
+      bad(k.key.name, text,
+          std::string("a number in ") + (k.key.min_exclusive ? "(" : "[") + formatDouble(k.key.min) + ", " +
+              formatDouble(k.key.max) + (k.key.max_exclusive ? ")" : "]"));
   }
 
   // Rules beyond a range.
@@ -347,6 +112,11 @@ std::vector<std::string> Config::validate() const
     bad("stereo_block_size", std::to_string(stereo_block_size), "an odd integer in [1, 31]");
   if (display_normalization != "max" && display_normalization != "minmax")
     bad("display_normalization", display_normalization, "max | minmax");
+  // Both keys named, so a ROS parameter reader falls back on both (either one alone could still break it).
+  if (!(verify_stereo_min_disparity_px < verify_stereo_max_disparity_px))
+    bad("verify_stereo_min_disparity_px/verify_stereo_max_disparity_px",
+        formatDouble(verify_stereo_min_disparity_px) + " / " + formatDouble(verify_stereo_max_disparity_px),
+        "the smallest disparity below the largest");
   return errors;
 }
 

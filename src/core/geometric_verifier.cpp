@@ -93,6 +93,26 @@ std::vector<std::string> VerifierParams::validate() const
   return errors;
 }
 
+VerifierParams verifierParams(const Config& config)
+{
+  VerifierParams params;
+  params.max_features = config.verify_max_features;
+  params.ratio = config.verify_ratio;
+  params.max_hamming = config.verify_max_hamming;
+  params.min_inliers = config.verify_min_inliers;
+  params.ransac_threshold_px = config.verify_ransac_threshold_px;
+  params.ransac_confidence = config.verify_ransac_confidence;
+  params.ransac_iterations = config.verify_ransac_iterations;
+  params.min_parallax_deg = config.verify_min_parallax_deg;
+  params.identical_max_flow_px = config.verify_identical_max_flow_px;
+  params.stereo_max_row_diff_px = config.verify_stereo_max_row_diff_px;
+  params.stereo_min_disparity_px = config.verify_stereo_min_disparity_px;
+  params.stereo_max_disparity_px = config.verify_stereo_max_disparity_px;
+  params.stereo_max_hamming = config.verify_stereo_max_hamming;
+  params.min_stereo_points = config.verify_min_stereo_points;
+  return params;
+}
+
 const char* toString(VerificationStatus status)
 {
   switch (status)

@@ -18,9 +18,6 @@ void checkOptions(const OnlineOptions& options)
   if (!std::isfinite(options.keyframe_angle) || options.keyframe_angle < 0.0)
     throw Error("keyframe_angle: value " + std::to_string(options.keyframe_angle) +
                 " is not allowed; expected radians >= 0 (0 = off)");
-  const auto errors = options.verifier.validate();
-  if (!errors.empty())
-    throw Error("verification parameters: " + errors.front());
 }
 
 double millisecondsSince(std::chrono::steady_clock::time_point start)
@@ -254,12 +251,19 @@ bool OnlineDetector::setCamera(const PinholeCamera& camera)
     return c.fx == camera.fx && c.fy == camera.fy && c.cx == camera.cx && c.cy == camera.cy &&
            c.baseline == camera.baseline && c.image_size == camera.image_size;
   }
-  verifier_ = std::make_unique<GeometricVerifier>(camera, options_.verifier);
+  verifier_ = std::make_unique<GeometricVerifier>(camera, verifierParams(config_));
   return true;
 }
 
 void OnlineDetector::updateConfig(const Config& config)
 {
+  // The verifier keeps the verify_* values it was built with; accepting others would make config() lie.
+  std::string changed;
+  for (const auto& key : Config::keys())
+    if (key.name.rfind("verify_", 0) == 0 && config.get(key.name) != config_.get(key.name))
+      changed += (changed.empty() ? "" : ", ") + key.name;
+  if (!changed.empty())
+    throw Error("cannot change " + changed + " while running: the verifier is built once; restart the detector");
   detector_.updateMatching(config);  // validates and refuses descriptor keys
   decision_.setConfig(config);
   config_ = config;

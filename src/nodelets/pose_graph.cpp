@@ -37,6 +37,8 @@
 //   ~optimise_period (double, 0.5 s): how often new loops are optimised (wall clock, works with a paused bag)
 //   ~publish_tf (bool, true)
 //   ~marker_width (double, 0.3 m): line width of loop_edges
+// A figure of the wrong type or outside its range (readParameters) is reported, as the detectors' are, with
+// the rule, and replaced by its default.
 
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
@@ -59,6 +61,7 @@
 
 #include "openable/pose_graph_builder.h"
 #include "openable_ros/LoopClosure.h"
+#include "openable_ros/params.h"
 
 namespace openable_ros
 {
@@ -106,18 +109,6 @@ bool finitePose(const geometry_msgs::Pose& p)
          std::isfinite(q) && q > 1e-6;
 }
 
-/// Reads ~name (> 0 and finite, else the default with a warning).
-double positive(ros::NodeHandle& pnh, const std::string& name, double fallback)
-{
-  double value = fallback;
-  pnh.param(name, value, fallback);
-  if (!(value > 0.0) || !std::isfinite(value))
-  {
-    ROS_WARN("pose_graph: ~%s = %g, expected a finite value > 0; using %g", name.c_str(), value, fallback);
-    value = fallback;
-  }
-  return value;
-}
 }  // namespace
 
 class PoseGraph : public nodelet::Nodelet
@@ -147,30 +138,32 @@ private:
                  loop_sub_.getTopic().c_str(), loss_name_.c_str(), map_frame_.c_str());
   }
 
-  // Reads and checks every parameter; a bad value is logged with the rule and replaced by the default.
+  // Reads and checks every parameter; a bad value is logged with the rule and replaced by the default. The
+  // figures go through the detectors' readers (src/ros/params.cpp), so both explain a bad value alike. Each
+  // must be > 0 (a zero sigma or period breaks the graph or the timer): its range starts just above 0.
   void readParameters(ros::NodeHandle& pnh)
   {
+    std::vector<std::string> warnings;
     pnh.param<std::string>("map_frame", map_frame_, "map");
-    options_.keyframe_distance = positive(pnh, "keyframe_distance", 1.0);
-    options_.keyframe_angle = positive(pnh, "keyframe_angle", 0.2);
-    options_.odometry_sigma_translation = positive(pnh, "odometry_sigma_translation", 0.02);
-    options_.odometry_sigma_rotation = positive(pnh, "odometry_sigma_rotation", 0.002);
-    options_.default_loop_sigma_translation = positive(pnh, "default_loop_sigma_translation", 0.2);
-    options_.default_loop_sigma_rotation = positive(pnh, "default_loop_sigma_rotation", 0.05);
-    options_.unverified_sigma_translation = positive(pnh, "unverified_sigma_translation", 3.0);
-    options_.max_interpolation_gap = positive(pnh, "max_interpolation_gap", 0.5);
-    optimise_period_ = positive(pnh, "optimise_period", 0.5);
-    marker_width_ = positive(pnh, "marker_width", 0.3);
+    options_.keyframe_distance = readDouble(pnh, "keyframe_distance", 1.0, 1e-3, 1e6, "m", warnings);
+    options_.keyframe_angle = readDouble(pnh, "keyframe_angle", 0.2, 1e-3, 10.0, "rad", warnings);
+    options_.odometry_sigma_translation =
+        readDouble(pnh, "odometry_sigma_translation", 0.02, 1e-6, 10.0, "(fraction of the distance)", warnings);
+    options_.odometry_sigma_rotation =
+        readDouble(pnh, "odometry_sigma_rotation", 0.002, 1e-6, 10.0, "rad per metre", warnings);
+    options_.default_loop_sigma_translation =
+        readDouble(pnh, "default_loop_sigma_translation", 0.2, 1e-6, 1e3, "m", warnings);
+    options_.default_loop_sigma_rotation =
+        readDouble(pnh, "default_loop_sigma_rotation", 0.05, 1e-6, 10.0, "rad", warnings);
+    options_.unverified_sigma_translation =
+        readDouble(pnh, "unverified_sigma_translation", 3.0, 1e-6, 1e3, "m", warnings);
+    options_.max_interpolation_gap = readDouble(pnh, "max_interpolation_gap", 0.5, 1e-3, 3600.0, "s", warnings);
+    optimise_period_ = readDouble(pnh, "optimise_period", 0.5, 1e-3, 3600.0, "s", warnings);
+    marker_width_ = readDouble(pnh, "marker_width", 0.3, 1e-3, 1e3, "m", warnings);
     pnh.param("use_unverified", use_unverified_, false);
     pnh.param("publish_tf", publish_tf_, true);
-    int history = 100000;
-    pnh.param("odometry_history", history, history);
-    if (history < 100)
-    {
-      NODELET_WARN("pose_graph: ~odometry_history %d is too small (expected >= 100); using 100000", history);
-      history = 100000;
-    }
-    options_.odometry_history = static_cast<size_t>(history);
+    options_.odometry_history =
+        static_cast<size_t>(readInt(pnh, "odometry_history", 100000, 100, 1000000000, warnings));
     pnh.param<std::string>("loss", loss_name_, "cauchy");
     if (loss_name_ == "cauchy")
       options_.graph.loop_loss = openable::RobustLoss::Cauchy;
@@ -184,7 +177,9 @@ private:
                    loss_name_.c_str());
       loss_name_ = "cauchy";
     }
-    options_.graph.loop_loss_scale = positive(pnh, "loss_scale", 1.0);
+    options_.graph.loop_loss_scale = readDouble(pnh, "loss_scale", 1.0, 1e-3, 1e3, "standard deviations", warnings);
+    for (const auto& warning : warnings)
+      NODELET_WARN("pose_graph: parameter %s", warning.c_str());
     builder_ = openable::PoseGraphBuilder(options_);
   }
 

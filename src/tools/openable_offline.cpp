@@ -59,6 +59,7 @@ const char* kUsage =
     "                     camera_info YAML (projection_matrix: rectified images) or a KITTI calib.txt (P1: a\n"
     "                     stereo baseline). Loops that fail are failed_verification, unverifiable ones\n"
     "                     unverified; neither is published. Loop-closure mode only (a map keeps no features).\n"
+    "                     The verifier's thresholds are the verify_* keys (--set verify_min_inliers=20).\n"
     "  --verify-optional  : unverifiable loops go out without a pose (~verify_required false)\n"
     "  --map-in FILE    : continue a saved map: the stream becomes a new session, matched against every\n"
     "                     session of the map and its own past (loop-closure mode only). Frame numbers in the\n"

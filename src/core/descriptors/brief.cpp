@@ -2,7 +2,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "openable/descriptors.h"
+#include "openable/descriptor_implementations.h"
 #include "openable/error.h"
 #include "patch_input.h"
 

@@ -4,7 +4,7 @@
 #include <tuple>
 
 #include "box_integral.h"
-#include "openable/descriptors.h"
+#include "openable/descriptor_implementations.h"
 #include "openable/error.h"
 #include "patch_input.h"
 

@@ -2,7 +2,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 
-#include "openable/descriptors.h"
+#include "openable/descriptor_implementations.h"
 #include "openable/error.h"
 #include "patch_input.h"
 

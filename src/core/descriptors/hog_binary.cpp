@@ -2,7 +2,7 @@
 #include <cstring>
 #include <vector>
 
-#include "openable/descriptors.h"
+#include "openable/descriptor_implementations.h"
 
 namespace openable
 {

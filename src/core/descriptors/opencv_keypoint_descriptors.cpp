@@ -2,7 +2,7 @@
 #include <cstring>
 #include <opencv2/features2d.hpp>
 
-#include "openable/descriptors.h"
+#include "openable/descriptor_implementations.h"
 #include "openable/error.h"
 #include "patch_input.h"
 

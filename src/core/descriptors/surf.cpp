@@ -1,7 +1,7 @@
 #include <cmath>
 
 #include "box_integral.h"
-#include "openable/descriptors.h"
+#include "openable/descriptor_implementations.h"
 #include "openable/error.h"
 #include "patch_input.h"
 

@@ -1,12 +1,12 @@
-#include "openable/descriptor.h"
+// What every DescriptorExtractor shares (the refusals of the form it lacks), the names, and the factory
+// that builds an extractor by name. The extractors themselves are in src/core/descriptors/.
+#include "openable/descriptor_extractor.h"
 
 #include <algorithm>
 
+#include "openable/descriptor_implementations.h"
 #include "openable/error.h"
 #include "openable/ldb.h"
-
-// @DESCRIPTOR_INCLUDES@ (other extractors' headers)
-#include "openable/descriptors.h"
 
 namespace openable
 {
@@ -34,7 +34,7 @@ std::unique_ptr<DescriptorExtractor> createByName(const Config& config)
   const std::string& name = config.descriptor;
   if (name == "LDB")
     return std::make_unique<LdbExtractor>();
-  // @DESCRIPTOR_FACTORY@ (other extractors: `if (name == "X") return std::make_unique<XExtractor>(...);`)
+  // A new extractor: `if (name == "X") return std::make_unique<XExtractor>(...);` and X in descriptorNames().
   if (name == "D-LDB")
     return std::make_unique<DldbExtractor>();
   // The others scale their pattern or window to patch_size (their constructors reject too small a patch).

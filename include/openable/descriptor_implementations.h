@@ -1,3 +1,6 @@
+// The DescriptorExtractor implementations besides LDB (openable/ldb.h), one class per descriptor; their
+// code is in src/core/descriptors/. Most callers need only the interface and the factory,
+// openable/descriptor_extractor.h.
 #pragma once
 
 #include <cstdint>
@@ -6,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/descriptor.h"
+#include "openable/descriptor_extractor.h"
 #include "openable/ldb.h"
 
 namespace openable

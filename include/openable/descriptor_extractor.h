@@ -1,3 +1,5 @@
+// The interface every descriptor implements (DescriptorExtractor, over a Patch), the descriptor names and
+// the factory that builds one by name. The implementations: openable/descriptor_implementations.h, ldb.h.
 #pragma once
 
 #include <cstdint>
