@@ -16,12 +16,12 @@
 #include "openable/throttle.h"
 #include "openable_ros/LoopClosure.h"
 #include "openable_ros/detector_diagnostics.h"
-#include "openable_ros/fix_history.h"
+#include "openable/fix_history.h"
 #include "openable_ros/loop_markers.h"
 #include "openable_ros/matrix_publisher.h"
 #include "openable_ros/pose_lookup.h"
 #include "openable_ros/ros_parameters.h"
-#include "openable_ros/sequence_gaps.h"
+#include "openable/sequence_gaps.h"
 
 namespace openable_ros
 {
@@ -107,8 +107,8 @@ private:
   ros::Publisher loop_pub_;
   ros::Publisher decisions_pub_;
   FrameCounters counters_;
-  SequenceGaps gaps_;
-  FixHistory fixes_;
+  openable::SequenceGaps gaps_;
+  openable::FixHistory fixes_;
   ros::Subscriber fix_sub_;
   std::ofstream geo_out_;
   DetectorDiagnostics diagnostics_;

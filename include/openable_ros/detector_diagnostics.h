@@ -22,7 +22,7 @@ struct FrameCounters
   uint64_t loops = 0;
   uint64_t dropped_by_synchroniser = 0;
   /// Messages that never reached a callback (subscriber or publisher queue full), from header.seq gaps
-  /// (SequenceGaps: what it can and cannot see). Not part of "received".
+  /// (openable::SequenceGaps: what it can and cannot see). Not part of "received".
   uint64_t dropped_queue = 0;
   uint64_t fixes = 0;            ///< usable ~fix messages
   uint64_t frames_with_fix = 0;  ///< stored frames that took a fix (written to ~geo_file when set)

@@ -7,9 +7,11 @@
 
 #include "openable/config.h"
 #include "openable/error.h"
+#include "openable/fix_history.h"
 #include "openable/frame_describer.h"
 #include "openable/reference_map.h"
 #include "openable/ring_sync.h"
+#include "openable/sequence_gaps.h"
 #include "openable/sync_watch.h"
 #include "openable/throttle.h"
 #include "test_util.h"
@@ -144,3 +146,61 @@ TEST(ReferenceMap, LoadsACompatibleMapAndRefusesOthersNamingWhy)
   std::remove(good.c_str());
   std::remove(none.c_str());
 }
+
+TEST(SequenceGaps, CountsTheNumbersThatNeverArrivedAndNothingElse)
+{
+  SequenceGaps gaps;
+  gaps.note(0, 10);  // the first message: nothing before it can be seen
+  EXPECT_EQ(gaps.lost(), 0u);
+  gaps.note(0, 11);
+  gaps.note(0, 14);  // 12 and 13 were sent and dropped
+  EXPECT_EQ(gaps.lost(), 2u);
+  gaps.note(0, 3);  // the publisher restarted: counting goes on from 3
+  gaps.note(0, 3);  // a publisher that does not number (seq stays): nothing
+  gaps.note(0, 5);
+  EXPECT_EQ(gaps.lost(), 3u);
+  // A stereo pair lost shows in both inputs: the frames lost are the larger count, not the sum.
+  gaps.note(1, 0);
+  gaps.note(1, 3);
+  EXPECT_EQ(gaps.lost(), 3u);  // input 0: 3, input 1: 2
+  gaps.note(1, 5);
+  EXPECT_EQ(gaps.lost(), 3u);  // both 3
+  gaps.note(1, 7);
+  EXPECT_EQ(gaps.lost(), 4u);
+  // Wrap-around of the 32-bit counter is a step back, not four billion lost frames.
+  gaps.note(0, 4294967295u);
+  const uint64_t before = gaps.lost();
+  gaps.note(0, 0);
+  EXPECT_EQ(gaps.lost(), before);
+}
+
+TEST(FixHistory, NearestFixWithinTheTolerance)
+{
+  FixHistory fixes;
+  openable::GeoPosition found;
+  EXPECT_FALSE(fixes.nearest(10.0, 1.0, found));
+  for (int k = 0; k < 3; ++k)
+  {
+    openable::GeoPosition f;
+    f.latitude = k;
+    f.stamp = 10.0 + k;
+    fixes.add(f);
+  }
+  ASSERT_TRUE(fixes.nearest(10.9, 0.5, found));
+  EXPECT_EQ(found.latitude, 1.0);
+  ASSERT_TRUE(fixes.nearest(11.5, 0.5, found));  // halfway: the later fix
+  EXPECT_EQ(found.latitude, 2.0);
+  EXPECT_FALSE(fixes.nearest(13.6, 0.5, found));  // the last fix is too old
+  EXPECT_FALSE(fixes.nearest(9.0, 0.5, found));
+  // Bounded: the oldest fixes leave.
+  for (size_t k = 0; k < FixHistory::kCapacity; ++k)
+  {
+    openable::GeoPosition f;
+    f.stamp = 100.0 + double(k);
+    fixes.add(f);
+  }
+  EXPECT_FALSE(fixes.nearest(10.0, 0.5, found));
+  fixes.clear();
+  EXPECT_FALSE(fixes.nearest(100.0, 0.5, found));
+}
+

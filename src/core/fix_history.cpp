@@ -1,8 +1,8 @@
-#include "openable_ros/fix_history.h"
+#include "openable/fix_history.h"
 
 #include <cmath>
 
-namespace openable_ros
+namespace openable
 {
 void FixHistory::add(const openable::GeoPosition& fix)
 {
@@ -35,4 +35,4 @@ void FixHistory::clear()
   fixes_.clear();
 }
 
-}  // namespace openable_ros
+}  // namespace openable

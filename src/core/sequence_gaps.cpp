@@ -1,8 +1,8 @@
-#include "openable_ros/sequence_gaps.h"
+#include "openable/sequence_gaps.h"
 
 #include <algorithm>
 
-namespace openable_ros
+namespace openable
 {
 void SequenceGaps::note(size_t index, uint32_t seq)
 {
@@ -25,4 +25,4 @@ uint64_t SequenceGaps::lost() const
   return most;
 }
 
-}  // namespace openable_ros
+}  // namespace openable

@@ -4,7 +4,7 @@
 
 #include "openable/geo_position.h"
 
-namespace openable_ros
+namespace openable
 {
 /// The recent GNSS fixes of ~fix, to give each frame the fix nearest to its stamp.
 ///
@@ -28,4 +28,4 @@ private:
   std::deque<openable::GeoPosition> fixes_;  ///< in arrival order
 };
 
-}  // namespace openable_ros
+}  // namespace openable

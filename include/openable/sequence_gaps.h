@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace openable_ros
+namespace openable
 {
 /// Frames an input lost before its callback ran, from the gaps in header.seq.
 ///
@@ -37,4 +37,4 @@ private:
   std::vector<Input> inputs_;
 };
 
-}  // namespace openable_ros
+}  // namespace openable
