@@ -94,7 +94,6 @@ private:
   SequenceMatcher matcher_;
   FrameMetric metric_;
   FrameDescriptor last_query_;
-  std::vector<float> row_;  ///< scratch: the current frame's normalised row while choosing candidates
   uint64_t next_query_id_ = 0;
 };
 

@@ -107,31 +107,11 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
   matcher_.match(descriptor.data(), database_, columns);
 
   // Top-k distinct places: repeatedly the smallest distance outside the windows of those already taken.
-  std::vector<float>& row = row_;  // reused: no allocation of N floats per frame
-  matcher_.normalizedRow(row, nullptr, minTerms());
+  // The matcher answers from what it summarised while matching: no second pass over the row.
   const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
-  const long window = config_.uniqueness_window;
   std::vector<size_t> taken;
-  while (taken.size() < wanted)
-  {
-    size_t best = row.size();
-    size_t finite = 0;
-    for (size_t c = 0; c < row.size(); ++c)
-      if (std::isfinite(row[c]))
-      {
-        ++finite;
-        if (best == row.size() || row[c] < row[best])
-          best = c;
-      }
-    if (taken.empty())
-      detection.candidates = finite;  // counted in the first scan: no extra pass over N
-    if (best == row.size())
-      break;
-    taken.push_back(best);
-    const size_t from = static_cast<size_t>(std::max<long>(0, long(best) - window));
-    const size_t to = std::min(row.size(), best + static_cast<size_t>(window) + 1);
-    std::fill(row.begin() + static_cast<long>(from), row.begin() + static_cast<long>(to), std::nanf(""));
-  }
+  detection.candidates = matcher_.smallestDistinct(wanted, static_cast<size_t>(std::max(0, config_.uniqueness_window)),
+                                                   minTerms(), taken);
   for (size_t i = 0; i < taken.size() && i < static_cast<size_t>(config_.top_k); ++i)
     detection.top.push_back(candidateAt(taken[i]));
 
