@@ -35,38 +35,55 @@ inline uint8_t grey(uint32_t b, uint32_t g, uint32_t r)
 }
 
 /// Every kx x ky block of pixels summed in Sum, wide enough for kx * ky * 255: uint16_t when it fits (twice the
-/// lanes of uint32_t per vector add). Per band of ky rows: column sums first, then, still one vectorised pass
-/// per dx, the sums of kx neighbouring values at every position. emit(oy, blocks) then reads the block of
-/// output pixel ox, channel c at blocks[ox * kx * channels + c].
+/// lanes of uint32_t per vector add). Per band of ky rows: column sums first (two rows per pass), then the sums
+/// of kx neighbouring values at every position, kLanes positions at a time in registers. emit(oy, blocks) then
+/// reads the block of output pixel ox, channel c at blocks[ox * kx * channels + c].
 template <typename Sum, typename Emit>
 void blockSums(const cv::Mat& image, int kx, int ky, cv::Size out, Emit emit)
 {
+  constexpr int kLanes = 32;
   const int channels = image.channels();
   const int x0 = (image.cols - out.width * kx) / 2;
   const int y0 = (image.rows - out.height * ky) / 2;
   const int row_values = out.width * kx * channels;
   const int window_values = row_values - (kx - 1) * channels;  // positions with kx pixels to their right
-  std::vector<Sum> column_sums(row_values), block_sums(window_values);
+  // Padded so that the last group of kLanes positions reads and writes inside (the padding is never emitted).
+  std::vector<Sum> column_sums(row_values + kLanes, 0), block_sums(window_values + kLanes);
   Sum* columns = column_sums.data();
   Sum* blocks = block_sums.data();
   for (int oy = 0; oy < out.height; ++oy)
   {
-    const uint8_t* first = image.ptr<uint8_t>(y0 + oy * ky) + x0 * channels;
+    const auto row = [&](int dy) { return image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels; };
+    const uint8_t* first = row(0);
     for (int i = 0; i < row_values; ++i)
       columns[i] = first[i];
-    for (int dy = 1; dy < ky; ++dy)
+    int dy = 1;
+    for (; dy + 1 < ky; dy += 2)
     {
-      const uint8_t* in = image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels;
+      const uint8_t* a = row(dy);
+      const uint8_t* b = row(dy + 1);
       for (int i = 0; i < row_values; ++i)
-        columns[i] = static_cast<Sum>(columns[i] + in[i]);
+        columns[i] = static_cast<Sum>(columns[i] + a[i] + b[i]);
     }
-    for (int i = 0; i < window_values; ++i)
-      blocks[i] = columns[i];
-    for (int dx = 1; dx < kx; ++dx)
+    if (dy < ky)
     {
-      const Sum* shifted = columns + dx * channels;
-      for (int i = 0; i < window_values; ++i)
-        blocks[i] = static_cast<Sum>(blocks[i] + shifted[i]);
+      const uint8_t* a = row(dy);
+      for (int i = 0; i < row_values; ++i)
+        columns[i] = static_cast<Sum>(columns[i] + a[i]);
+    }
+    for (int i = 0; i < window_values; i += kLanes)
+    {
+      Sum sum[kLanes];
+      for (int j = 0; j < kLanes; ++j)
+        sum[j] = columns[i + j];
+      for (int dx = 1; dx < kx; ++dx)
+      {
+        const Sum* shifted = columns + i + dx * channels;
+        for (int j = 0; j < kLanes; ++j)
+          sum[j] = static_cast<Sum>(sum[j] + shifted[j]);
+      }
+      for (int j = 0; j < kLanes; ++j)
+        blocks[i + j] = sum[j];
     }
     emit(oy, static_cast<const Sum*>(blocks));
   }
