@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -34,6 +35,82 @@ inline uint8_t grey(uint32_t b, uint32_t g, uint32_t r)
   return static_cast<uint8_t>((b * 3735 + g * 19235 + r * 9798 + (1 << 14)) >> 15);
 }
 
+/// columns[i] += a[i] + b[i] (b may be null) and blocks[i] = sum over dx < kx of columns[i + dx * step], for
+/// i < n, in groups of kLanes positions (the arrays are padded). Compiled twice, for AVX2 and for any x86-64
+/// (the package builds without -march), and chosen when the library loads: twice the lanes per instruction on
+/// the two loops that read every byte of the image.
+constexpr int kLanes = 32;
+
+template <typename Sum>
+inline void addRows(Sum* __restrict columns, const uint8_t* __restrict a, const uint8_t* __restrict b, int n)
+{
+  if (b)
+    for (int i = 0; i < n; ++i)
+      columns[i] = static_cast<Sum>(columns[i] + a[i] + b[i]);
+  else
+    for (int i = 0; i < n; ++i)
+      columns[i] = static_cast<Sum>(columns[i] + a[i]);
+}
+
+template <typename Sum>
+inline void windowSums(const Sum* __restrict columns, int n, int kx, int step, Sum* __restrict blocks)
+{
+  // A 32-byte vector of sums held in a register across the kx terms (a plain array of them went through the
+  // stack for every term).
+  typedef Sum Vector __attribute__((vector_size(32)));
+  constexpr int kVector = 32 / sizeof(Sum);
+  static_assert(kLanes % kVector == 0, "the padding covers whole vectors");
+  for (int i = 0; i < n; i += kVector)
+  {
+    Vector sum, term;
+    std::memcpy(&sum, columns + i, sizeof(sum));
+    for (int dx = 1; dx < kx; ++dx)
+    {
+      std::memcpy(&term, columns + i + dx * step, sizeof(term));
+      sum += term;
+    }
+    std::memcpy(blocks + i, &sum, sizeof(sum));
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define OPENABLE_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define OPENABLE_CLONES
+#endif
+OPENABLE_CLONES void addRows16(uint16_t* columns, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows(columns, a, b, n);
+}
+OPENABLE_CLONES void addRows32(uint32_t* columns, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows(columns, a, b, n);
+}
+OPENABLE_CLONES void windowSums16(const uint16_t* columns, int n, int kx, int step, uint16_t* blocks)
+{
+  windowSums(columns, n, kx, step, blocks);
+}
+OPENABLE_CLONES void windowSums32(const uint32_t* columns, int n, int kx, int step, uint32_t* blocks)
+{
+  windowSums(columns, n, kx, step, blocks);
+}
+inline void addRowsTo(uint16_t* c, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows16(c, a, b, n);
+}
+inline void addRowsTo(uint32_t* c, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows32(c, a, b, n);
+}
+inline void windowSumsOf(const uint16_t* c, int n, int kx, int step, uint16_t* out)
+{
+  windowSums16(c, n, kx, step, out);
+}
+inline void windowSumsOf(const uint32_t* c, int n, int kx, int step, uint32_t* out)
+{
+  windowSums32(c, n, kx, step, out);
+}
+
 /// Every kx x ky block of pixels summed in Sum, wide enough for kx * ky * 255: uint16_t when it fits (twice the
 /// lanes of uint32_t per vector add). Per band of ky rows: column sums first (two rows per pass), then the sums
 /// of kx neighbouring values at every position, kLanes positions at a time in registers. emit(oy, blocks) then
@@ -41,7 +118,6 @@ inline uint8_t grey(uint32_t b, uint32_t g, uint32_t r)
 template <typename Sum, typename Emit>
 void blockSums(const cv::Mat& image, int kx, int ky, cv::Size out, Emit emit)
 {
-  constexpr int kLanes = 32;
   const int channels = image.channels();
   const int x0 = (image.cols - out.width * kx) / 2;
   const int y0 = (image.rows - out.height * ky) / 2;
@@ -54,37 +130,13 @@ void blockSums(const cv::Mat& image, int kx, int ky, cv::Size out, Emit emit)
   for (int oy = 0; oy < out.height; ++oy)
   {
     const auto row = [&](int dy) { return image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels; };
-    const uint8_t* first = row(0);
-    for (int i = 0; i < row_values; ++i)
-      columns[i] = first[i];
-    int dy = 1;
+    std::fill(columns, columns + row_values, Sum(0));
+    int dy = 0;
     for (; dy + 1 < ky; dy += 2)
-    {
-      const uint8_t* a = row(dy);
-      const uint8_t* b = row(dy + 1);
-      for (int i = 0; i < row_values; ++i)
-        columns[i] = static_cast<Sum>(columns[i] + a[i] + b[i]);
-    }
+      addRowsTo(columns, row(dy), row(dy + 1), row_values);
     if (dy < ky)
-    {
-      const uint8_t* a = row(dy);
-      for (int i = 0; i < row_values; ++i)
-        columns[i] = static_cast<Sum>(columns[i] + a[i]);
-    }
-    for (int i = 0; i < window_values; i += kLanes)
-    {
-      Sum sum[kLanes];
-      for (int j = 0; j < kLanes; ++j)
-        sum[j] = columns[i + j];
-      for (int dx = 1; dx < kx; ++dx)
-      {
-        const Sum* shifted = columns + i + dx * channels;
-        for (int j = 0; j < kLanes; ++j)
-          sum[j] = static_cast<Sum>(sum[j] + shifted[j]);
-      }
-      for (int j = 0; j < kLanes; ++j)
-        blocks[i + j] = sum[j];
-    }
+      addRowsTo(columns, row(dy), nullptr, row_values);
+    windowSumsOf(columns, window_values, kx, channels, blocks);
     emit(oy, static_cast<const Sum*>(blocks));
   }
 }
