@@ -114,8 +114,10 @@ private:
   };
   const uint64_t* recentQuery(size_t age) const;
   float meanTerm(uint32_t sum, uint16_t count) const;
-  void advanceForward(const PlaceDatabase& reference, size_t begin, size_t end, Carry& carry, ChunkSummary& summary);
-  void advanceReverse(const PlaceDatabase& reference, size_t begin, size_t end, size_t old_columns,
+  /// `was_full`: the previous frame's summaries show that every chain this chunk continues was full.
+  void advanceForward(const PlaceDatabase& reference, size_t begin, size_t end, bool was_full, Carry& carry,
+                      ChunkSummary& summary);
+  void advanceReverse(const PlaceDatabase& reference, size_t begin, size_t end, size_t old_columns, bool was_full,
                       ChunkSummary& summary);
   float chunkMinimum(size_t chunk, int min_terms, const std::vector<size_t>& taken, size_t window,
                      size_t* finite) const;
@@ -128,6 +130,7 @@ private:
   Chains forward_;  ///< updated in place: no second buffer streamed through memory every frame
   Chains reverse_;
   std::vector<ChunkSummary> summaries_;  ///< per chunk of columns; empty when the chains changed since match()
+  std::vector<ChunkSummary> previous_summaries_;  ///< the frame before's, while match() runs
   std::vector<uint64_t> recent_;         ///< ring of the last L + 1 query descriptors
   // Scratch for one chunk of columns.
   std::vector<uint32_t> entering_;  ///< d(t, j)

@@ -113,10 +113,14 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
   std::memcpy(recent_.data() + (queries_ % (sequence_length_ + 1)) * words, query, sizeof(uint64_t) * words);
   ++queries_;
 
+  // The previous frame's summaries say which chunks held only full chains, so that their counts need not be
+  // read again. Valid while the columns stay where they were (cleared when the chains restart).
+  previous_summaries_.swap(summaries_);
   // Frames evicted from the front of the reference take their columns with them.
   const uint64_t new_first = reference.firstId();
   if (new_first != first_id_)
   {
+    previous_summaries_.clear();
     const size_t gone = static_cast<size_t>(std::min<uint64_t>(new_first - first_id_, forward_.sum.size()));
     for (Chains* chains : {&forward_, &reverse_})
     {
@@ -130,6 +134,7 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
   // The chains are updated in place, one chunk of columns after the other, both directions in the same pass
   // over the descriptors. Columns that did not exist in the previous frame start with count 0 (no chain).
   const size_t columns = candidates;
+  const size_t old_forward_columns = forward_.count.size();
   forward_.sum.resize(columns);
   forward_.count.resize(columns);
   const size_t old_reverse_columns = reverse_.count.size();
@@ -139,14 +144,19 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
     reverse_.count.resize(columns);
   }
   summaries_.assign((columns + kChunk - 1) / kChunk, ChunkSummary());
+  const auto wasFull = [&](size_t chunk)
+  { return chunk < previous_summaries_.size() && previous_summaries_[chunk].full; };
   Carry carry;  // column -1 has no chain
   for (size_t begin = 0; begin < columns; begin += kChunk)
   {
     const size_t end = std::min(columns, begin + kChunk);
-    ChunkSummary& summary = summaries_[begin / kChunk];
-    advanceForward(reference, begin, end, carry, summary);
+    const size_t chunk = begin / kChunk;
+    ChunkSummary& summary = summaries_[chunk];
+    // Forward chains continue columns begin - 1 .. end - 2 (the first one is the carry's), reverse ones
+    // columns begin + 1 .. end (the last one in the next chunk).
+    advanceForward(reference, begin, end, wasFull(chunk) && end - 1 <= old_forward_columns, carry, summary);
     if (bidirectional_)
-      advanceReverse(reference, begin, end, old_reverse_columns, summary);
+      advanceReverse(reference, begin, end, old_reverse_columns, wasFull(chunk) && wasFull(chunk + 1), summary);
   }
   if (bidirectional_)
   {
@@ -161,8 +171,8 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
 // column is carried to the next chunk, whose first column needs it. Ascending: the descriptors L columns
 // back, read for the leaving term, were read one or two chunks ago and are still in cache, so the history is
 // streamed from memory once per frame.
-void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begin, size_t end, Carry& carry,
-                                     ChunkSummary& summary)
+void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begin, size_t end, bool was_full,
+                                     Carry& carry, ChunkSummary& summary)
 {
   const size_t L = sequence_length_;
   const size_t n = end - begin;
@@ -190,7 +200,8 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
   // The steady state: every chain of the previous frame's columns begin - 1 .. end - 2 was full, so every new
   // one is. One fused pass computes entering minus leaving terms; the counts stay L (only the last column's
   // is new: the others already held L).
-  if (can_drop && begin >= L && before.count == L && allEqual(count + begin, n - 1, static_cast<uint16_t>(L)))
+  if (can_drop && begin >= L && before.count == L &&
+      (was_full || allEqual(count + begin, n - 1, static_cast<uint16_t>(L))))
   {
     metric_.rowDifference(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin - L), n,
                           change_.data());
@@ -241,7 +252,7 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
 // ascending order has not overwritten yet (the next chunk's first column included). The leaving descriptors
 // L columns ahead come from memory here and are in cache when the forward pass reaches them.
 void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t begin, size_t end, size_t old_columns,
-                                     ChunkSummary& summary)
+                                     bool was_full, ChunkSummary& summary)
 {
   const size_t L = sequence_length_;
   const size_t n = end - begin;
@@ -255,7 +266,8 @@ void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t begi
   uint32_t* previous_sum = previous_.sum.data();
   uint16_t* previous_count = previous_.count.data();
 
-  if (can_drop && end <= drop_end && end < old_columns && allEqual(count + begin + 1, n, static_cast<uint16_t>(L)))
+  if (can_drop && end <= drop_end && end < old_columns &&
+      (was_full || allEqual(count + begin + 1, n, static_cast<uint16_t>(L))))
   {
     metric_.rowDifference(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin + L), n,
                           change_.data());
