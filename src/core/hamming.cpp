@@ -279,9 +279,37 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowDifferenceAvx512(cons
     packed[words](qa, rows_a, qb, rows_b, count, out);
     return;
   }
+  if (words > 24)
+  {
+    for (size_t i = 0; i < count; ++i)
+      out[i] = int32_t(pairAvx512Inline(qa, rows_a + i * stride, words)) -
+               int32_t(pairAvx512Inline(qb, rows_b + i * stride, words));
+    return;
+  }
+  // Up to three vectors (LDB: 22 words): both queries and the masks in registers, as in rowAvx512, and the
+  // two bit counts subtracted per lane before the one horizontal sum.
+  const auto maskFor = [words](size_t first) -> __mmask8 {
+    return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
+  };
+  const __mmask8 m0 = maskFor(0), m1 = maskFor(8), m2 = maskFor(16);
+  const __m512i a0 = _mm512_maskz_loadu_epi64(m0, qa), a1 = _mm512_maskz_loadu_epi64(m1, qa + 8),
+                a2 = _mm512_maskz_loadu_epi64(m2, qa + 16);
+  const __m512i b0 = _mm512_maskz_loadu_epi64(m0, qb), b1 = _mm512_maskz_loadu_epi64(m1, qb + 8),
+                b2 = _mm512_maskz_loadu_epi64(m2, qb + 16);
   for (size_t i = 0; i < count; ++i)
-    out[i] = int32_t(pairAvx512Inline(qa, rows_a + i * stride, words)) -
-             int32_t(pairAvx512Inline(qb, rows_b + i * stride, words));
+  {
+    const uint64_t* ra = rows_a + i * stride;
+    const uint64_t* rb = rows_b + i * stride;
+    __m512i d = _mm512_sub_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(a0, _mm512_maskz_loadu_epi64(m0, ra))),
+                                 _mm512_popcnt_epi64(_mm512_xor_si512(b0, _mm512_maskz_loadu_epi64(m0, rb))));
+    d = _mm512_add_epi64(d, _mm512_sub_epi64(
+                                _mm512_popcnt_epi64(_mm512_xor_si512(a1, _mm512_maskz_loadu_epi64(m1, ra + 8))),
+                                _mm512_popcnt_epi64(_mm512_xor_si512(b1, _mm512_maskz_loadu_epi64(m1, rb + 8)))));
+    d = _mm512_add_epi64(d, _mm512_sub_epi64(
+                                _mm512_popcnt_epi64(_mm512_xor_si512(a2, _mm512_maskz_loadu_epi64(m2, ra + 16))),
+                                _mm512_popcnt_epi64(_mm512_xor_si512(b2, _mm512_maskz_loadu_epi64(m2, rb + 16)))));
+    out[i] = static_cast<int32_t>(_mm512_reduce_add_epi64(d));
+  }
 }
 #pragma GCC diagnostic pop
 #endif
