@@ -129,9 +129,9 @@ private:
   uint64_t first_id_ = 0;
   Chains forward_;  ///< updated in place: no second buffer streamed through memory every frame
   Chains reverse_;
-  std::vector<ChunkSummary> summaries_;  ///< per chunk of columns; empty when the chains changed since match()
+  std::vector<ChunkSummary> summaries_;           ///< per chunk of columns; empty when the chains changed since match()
   std::vector<ChunkSummary> previous_summaries_;  ///< the frame before's, while match() runs
-  std::vector<uint64_t> recent_;         ///< ring of the last L + 1 query descriptors
+  std::vector<uint64_t> recent_;                  ///< ring of the last L + 1 query descriptors
   // Scratch for one chunk of columns.
   std::vector<uint32_t> entering_;  ///< d(t, j)
   std::vector<uint32_t> leaving_;   ///< d(t - L, j -/+ L)

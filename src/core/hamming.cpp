@@ -165,8 +165,8 @@ struct PackedRows
     __m512i packed = _mm512_setzero_si512();
     for (size_t j = 0; j < W; ++j)
       packed = _mm512_or_si512(
-          packed, _mm512_slli_epi64(
-                      _mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(r + 8 * j), pattern[j])), 8 * j));
+          packed,
+          _mm512_slli_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(r + 8 * j), pattern[j])), 8 * j));
     return packed;
   }
 
@@ -195,8 +195,7 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowA
 // (a byte), so the bytes are subtracted before the horizontal sum and the bias 64 W after it.
 template <size_t W>
 __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowDifferenceAvx512Packed(
-    const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b, size_t count,
-    int32_t* out)
+    const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b, size_t count, int32_t* out)
 {
   const PackedRows<W> a(qa), b(qb);
   const __m512i bias = _mm512_set1_epi8(64);
@@ -302,12 +301,12 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowDifferenceAvx512(cons
     const uint64_t* rb = rows_b + i * stride;
     __m512i d = _mm512_sub_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(a0, _mm512_maskz_loadu_epi64(m0, ra))),
                                  _mm512_popcnt_epi64(_mm512_xor_si512(b0, _mm512_maskz_loadu_epi64(m0, rb))));
-    d = _mm512_add_epi64(d, _mm512_sub_epi64(
-                                _mm512_popcnt_epi64(_mm512_xor_si512(a1, _mm512_maskz_loadu_epi64(m1, ra + 8))),
-                                _mm512_popcnt_epi64(_mm512_xor_si512(b1, _mm512_maskz_loadu_epi64(m1, rb + 8)))));
-    d = _mm512_add_epi64(d, _mm512_sub_epi64(
-                                _mm512_popcnt_epi64(_mm512_xor_si512(a2, _mm512_maskz_loadu_epi64(m2, ra + 16))),
-                                _mm512_popcnt_epi64(_mm512_xor_si512(b2, _mm512_maskz_loadu_epi64(m2, rb + 16)))));
+    d = _mm512_add_epi64(
+        d, _mm512_sub_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(a1, _mm512_maskz_loadu_epi64(m1, ra + 8))),
+                            _mm512_popcnt_epi64(_mm512_xor_si512(b1, _mm512_maskz_loadu_epi64(m1, rb + 8)))));
+    d = _mm512_add_epi64(
+        d, _mm512_sub_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(a2, _mm512_maskz_loadu_epi64(m2, ra + 16))),
+                            _mm512_popcnt_epi64(_mm512_xor_si512(b2, _mm512_maskz_loadu_epi64(m2, rb + 16)))));
     out[i] = static_cast<int32_t>(_mm512_reduce_add_epi64(d));
   }
 }

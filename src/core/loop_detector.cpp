@@ -110,8 +110,8 @@ Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo inf
   // The matcher answers from what it summarised while matching: no second pass over the row.
   const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
   std::vector<size_t> taken;
-  detection.candidates = matcher_.smallestDistinct(wanted, static_cast<size_t>(std::max(0, config_.uniqueness_window)),
-                                                   minTerms(), taken);
+  detection.candidates =
+      matcher_.smallestDistinct(wanted, static_cast<size_t>(std::max(0, config_.uniqueness_window)), minTerms(), taken);
   for (size_t i = 0; i < taken.size() && i < static_cast<size_t>(config_.top_k); ++i)
     detection.top.push_back(candidateAt(taken[i]));
 

@@ -391,8 +391,7 @@ float SequenceMatcher::chunkMinimum(size_t chunk, int min_terms, const std::vect
   return best;
 }
 
-size_t SequenceMatcher::smallestDistinct(size_t count, size_t window, int min_terms,
-                                         std::vector<size_t>& taken) const
+size_t SequenceMatcher::smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& taken) const
 {
   taken.clear();
   const size_t chunks = (columns() + kChunk - 1) / kChunk;

@@ -244,8 +244,8 @@ TEST(SequenceMatcher, ManyColumnsWithChangingCandidatesEqualBruteForce)
 TEST(SequenceMatcher, SmallestDistinctEqualsScanningTheRow)
 {
   std::mt19937_64 rng(29);
-  const auto naive = [](const SequenceMatcher& m, size_t count, size_t window, int min_terms,
-                        std::vector<size_t>& taken)
+  const auto naive =
+      [](const SequenceMatcher& m, size_t count, size_t window, int min_terms, std::vector<size_t>& taken)
   {
     std::vector<float> row;
     m.normalizedRow(row, nullptr, min_terms);
