@@ -22,8 +22,16 @@ cv::Mat areaDownsample(const cv::Mat& image, cv::Size target);
 /// Step 1 alone: the kx x ky block means of `image`, leftover border pixels left out as above.
 cv::Mat decimate(const cv::Mat& image, int kx, int ky);
 
+/// decimate() of a grey, BGR or BGRA image, converted to grey as cv::cvtColor does (8-bit BGR(A) -> grey):
+/// the same pixels as cvtColor(decimate(image, kx, ky)), with the conversion done on the decimated pixels
+/// only and no colour image in between. A grey image is decimate()'s.
+cv::Mat decimateGrey(const cv::Mat& image, int kx, int ky);
+
 /// Step 1 with the largest factors that keep at least `target` (the image itself when they are 1), for
 /// callers that do per-pixel work between the two steps.
 cv::Mat decimateTowards(const cv::Mat& image, cv::Size target);
+
+/// decimateTowards(), converted to grey as decimateGrey() does (cvtColor when the factors are 1).
+cv::Mat decimateGreyTowards(const cv::Mat& image, cv::Size target);
 
 }  // namespace openable

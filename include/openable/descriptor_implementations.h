@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 #include <string>
@@ -200,6 +201,9 @@ private:
 /// OpenCV's HOGDescriptor with the patch as its window: 4x4 cells, blocks of 2x2 cells moved by one cell,
 /// 9 unsigned orientation bins: 3 * 3 * 4 * 9 = 324 floats. A patch_size that is not a multiple of 4 is
 /// first resized (area interpolation) to the multiple of 4 below it, so that cells tile the window exactly.
+/// The gradients are OpenCV's (HOGDescriptor::computeGradient); the block histograms are computed here, with
+/// OpenCV's weights, order of additions and normalisation (the same floats: test_descriptors), from tables
+/// built once instead of at every call.
 class HogExtractor : public DescriptorExtractor
 {
 public:
@@ -221,8 +225,10 @@ public:
   void describeFloat(const Patch& patch, float* values) const override;
 
 private:
+  struct Blocks;
   int patch_size_;
   int window_;
+  std::shared_ptr<const Blocks> blocks_;
 };
 
 /// HOG-B: the compact binary signature. HOG as HogExtractor computes it (324 values), each bit 1 when its

@@ -23,6 +23,10 @@ public:
   uint32_t distance(const uint64_t* a, const uint64_t* b, int* shift = nullptr) const;
   /// out[i] = distance(query, rows + i * frameWords()) for i < count.
   void row(const uint64_t* query, const uint64_t* rows, size_t count, uint32_t* out) const;
+  /// out[i] = distance(qa, rows_a + i * frameWords()) - distance(qb, rows_b + i * frameWords()) for i < count,
+  /// in one pass over both (hammingRowDifference for plain binary layouts).
+  void rowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                     size_t count, int32_t* out) const;
 
 private:
   uint32_t blockDistance(const uint64_t* a, const uint64_t* b) const;

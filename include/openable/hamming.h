@@ -32,6 +32,14 @@ void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size
 void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* rows, size_t stride, size_t words,
                 size_t count, uint32_t* out);
 
+/// out[i] = hamming(qa, rows_a + i * stride, words) - hamming(qb, rows_b + i * stride, words) for i < count:
+/// the entering minus the leaving term of a sequence sum (sequence_matcher.h), both rows read in one pass and,
+/// on AVX-512 with packed small rows, summed in one horizontal step.
+void hammingRowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                          size_t stride, size_t words, size_t count, int32_t* out);
+void hammingRowDifference(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
+                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, int32_t* out);
+
 /// Euclidean distance between two float vectors.
 float l2Distance(const float* a, const float* b, size_t length);
 

@@ -70,8 +70,8 @@ public:
 
 private:
   size_t candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const;
-  /// The candidate at `entry` of row_ (which session, which column of its matcher).
-  Candidate candidateAt(const SessionMap& map, size_t entry) const;
+  /// The candidate in `column` of `session`'s matcher.
+  Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;
   int minTerms() const;
 
   Config config_;
@@ -79,9 +79,7 @@ private:
   FrameMetric metric_;
   std::vector<SequenceMatcher> matchers_;  ///< one per session of the map, in map order
   FrameDescriptor last_query_;
-  std::vector<float> row_;      ///< scratch: every session's normalised row, one after another
-  std::vector<float> session_row_;  ///< scratch: the row of one session after the first
-  std::vector<size_t> offsets_;  ///< where each session's row starts in row_ (and, last, its size)
+  std::vector<size_t> taken_;  ///< scratch: one session's best distinct columns
 };
 
 }  // namespace openable

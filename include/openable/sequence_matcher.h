@@ -85,27 +85,58 @@ public:
   /// normalized() for every column.
   void normalizedRow(std::vector<float>& out, std::vector<int8_t>* directions = nullptr, int min_terms = 1) const;
 
+  /// The best distinct places of the current row, as a detector picks them: repeatedly the column with the
+  /// smallest normalized(column, nullptr, min_terms) (the lowest column on ties) that lies more than `window`
+  /// columns from every column already taken, until `count` are taken or none is left. Returns the number
+  /// of columns with a distance (normalized() finite). The same as scanning normalizedRow() `count` times,
+  /// but runs of columns whose sequences are all full are summarised by their smallest sum while matching,
+  /// so this reads the row's state only where a summary does not answer (the start of the stream, a chosen
+  /// column's neighbourhood).
+  size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const;
+
 private:
   struct Chains
   {
     std::vector<uint32_t> sum;
     std::vector<uint16_t> count;
   };
+  /// One chunk of columns after match(): when `full`, every chain in it (both directions with bidirectional)
+  /// holds L terms and `minimum` is the smallest of their sums.
+  struct ChunkSummary
+  {
+    uint32_t minimum = 0;
+    bool full = false;
+  };
+  struct Carry  ///< the previous frame's chain of the column before a chunk, already overwritten in place
+  {
+    uint32_t sum = 0;
+    uint16_t count = 0;
+  };
   const uint64_t* recentQuery(size_t age) const;
-  void advanceForward(const PlaceDatabase& reference, size_t columns);
-  void advanceReverse(const PlaceDatabase& reference, size_t columns);
+  float meanTerm(uint32_t sum, uint16_t count) const;
+  /// `was_full`: the previous frame's summaries show that every chain this chunk continues was full.
+  void advanceForward(const PlaceDatabase& reference, size_t begin, size_t end, bool was_full, Carry& carry,
+                      ChunkSummary& summary);
+  void advanceReverse(const PlaceDatabase& reference, size_t begin, size_t end, size_t old_columns, bool was_full,
+                      ChunkSummary& summary);
+  float chunkMinimum(size_t chunk, int min_terms, const std::vector<size_t>& taken, size_t window,
+                     size_t* finite) const;
 
   FrameMetric metric_;
   int sequence_length_;
   bool bidirectional_;
   uint64_t queries_ = 0;
   uint64_t first_id_ = 0;
-  Chains forward_;
+  Chains forward_;  ///< updated in place: no second buffer streamed through memory every frame
   Chains reverse_;
-  Chains next_;                   ///< the next frame's chains are built here, then swapped in (no copy)
-  std::vector<uint64_t> recent_;  ///< ring of the last L + 1 query descriptors
-  std::vector<uint32_t> current_distances_;
-  std::vector<uint32_t> dropped_distances_;
+  std::vector<ChunkSummary> summaries_;           ///< per chunk of columns; empty when the chains changed since match()
+  std::vector<ChunkSummary> previous_summaries_;  ///< the frame before's, while match() runs
+  std::vector<uint64_t> recent_;                  ///< ring of the last L + 1 query descriptors
+  // Scratch for one chunk of columns.
+  std::vector<uint32_t> entering_;  ///< d(t, j)
+  std::vector<uint32_t> leaving_;   ///< d(t - L, j -/+ L)
+  std::vector<int32_t> change_;     ///< entering - leaving
+  Chains previous_;                 ///< the previous frame's chains of columns j - 1
 };
 
 }  // namespace openable

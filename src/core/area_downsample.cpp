@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -11,72 +12,229 @@ namespace openable
 {
 namespace
 {
+/// The rounded mean (sum + count / 2) / count of a block, by a multiplication where the sums are 16-bit: with
+/// m = 2^32 / count + 1 the error of x m / 2^32 against x / count is below x / 2^32 < 1 / count (x count < 2^32
+/// for x < 2^16 and count < 2^16), too small to cross an integer, so the floor is exact.
+template <typename Sum>
+struct RoundedMean
+{
+  explicit RoundedMean(uint32_t count) : count(count), multiplier((uint64_t(1) << 32) / count + 1) {}
+  uint8_t operator()(Sum sum) const
+  {
+    const uint64_t x = uint64_t(sum) + count / 2;
+    return static_cast<uint8_t>(sizeof(Sum) == 2 ? (x * multiplier) >> 32 : x / count);
+  }
+  uint32_t count;
+  uint64_t multiplier;
+};
+
+/// OpenCV's 8-bit BGR -> grey conversion (cv::cvtColor, COLOR_BGR2GRAY, OpenCV 4): Rec. 601 weights in 15-bit
+/// fixed point, rounded. The same numbers as cvtColor for every colour (test_preprocessor checks all 2^24).
+inline uint8_t grey(uint32_t b, uint32_t g, uint32_t r)
+{
+  return static_cast<uint8_t>((b * 3735 + g * 19235 + r * 9798 + (1 << 14)) >> 15);
+}
+
+/// columns[i] += a[i] + b[i] (b may be null) and blocks[i] = sum over dx < kx of columns[i + dx * step], for
+/// i < n, in groups of kLanes positions (the arrays are padded). Compiled twice, for AVX2 and for any x86-64
+/// (the package builds without -march), and chosen when the library loads: twice the lanes per instruction on
+/// the two loops that read every byte of the image.
+constexpr int kLanes = 32;
+
+template <typename Sum>
+inline void addRows(Sum* __restrict columns, const uint8_t* __restrict a, const uint8_t* __restrict b, int n)
+{
+  if (b)
+    for (int i = 0; i < n; ++i)
+      columns[i] = static_cast<Sum>(columns[i] + a[i] + b[i]);
+  else
+    for (int i = 0; i < n; ++i)
+      columns[i] = static_cast<Sum>(columns[i] + a[i]);
+}
+
+template <typename Sum>
+inline void windowSums(const Sum* __restrict columns, int n, int kx, int step, Sum* __restrict blocks)
+{
+  // A 32-byte vector of sums held in a register across the kx terms (a plain array of them went through the
+  // stack for every term).
+  typedef Sum Vector __attribute__((vector_size(32)));
+  constexpr int kVector = 32 / sizeof(Sum);
+  static_assert(kLanes % kVector == 0, "the padding covers whole vectors");
+  for (int i = 0; i < n; i += kVector)
+  {
+    Vector sum, term;
+    std::memcpy(&sum, columns + i, sizeof(sum));
+    for (int dx = 1; dx < kx; ++dx)
+    {
+      std::memcpy(&term, columns + i + dx * step, sizeof(term));
+      sum += term;
+    }
+    std::memcpy(blocks + i, &sum, sizeof(sum));
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define OPENABLE_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define OPENABLE_CLONES
+#endif
+OPENABLE_CLONES void addRows16(uint16_t* columns, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows(columns, a, b, n);
+}
+OPENABLE_CLONES void addRows32(uint32_t* columns, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows(columns, a, b, n);
+}
+OPENABLE_CLONES void windowSums16(const uint16_t* columns, int n, int kx, int step, uint16_t* blocks)
+{
+  windowSums(columns, n, kx, step, blocks);
+}
+OPENABLE_CLONES void windowSums32(const uint32_t* columns, int n, int kx, int step, uint32_t* blocks)
+{
+  windowSums(columns, n, kx, step, blocks);
+}
+inline void addRowsTo(uint16_t* c, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows16(c, a, b, n);
+}
+inline void addRowsTo(uint32_t* c, const uint8_t* a, const uint8_t* b, int n)
+{
+  addRows32(c, a, b, n);
+}
+inline void windowSumsOf(const uint16_t* c, int n, int kx, int step, uint16_t* out)
+{
+  windowSums16(c, n, kx, step, out);
+}
+inline void windowSumsOf(const uint32_t* c, int n, int kx, int step, uint32_t* out)
+{
+  windowSums32(c, n, kx, step, out);
+}
+
 /// Every kx x ky block of pixels summed in Sum, wide enough for kx * ky * 255: uint16_t when it fits (twice the
-/// lanes of uint32_t per vector add). Per band of ky rows: column sums first, then, still one vectorised pass
-/// per dx, the sums of kx neighbouring pixels at every position; each output pixel takes the one at its
-/// block's start. The mean is a multiplication by the reciprocal in double, exact here: a quotient of integers
-/// below 2^32 is at least 1 / count away from the next integer, far more than the rounding error.
+/// lanes of uint32_t per vector add). Per band of ky rows: column sums first (two rows per pass), then the sums
+/// of kx neighbouring values at every position, kLanes positions at a time in registers. emit(oy, blocks) then
+/// reads the block of output pixel ox, channel c at blocks[ox * kx * channels + c].
+template <typename Sum, typename Emit>
+void blockSums(const cv::Mat& image, int kx, int ky, cv::Size out, Emit emit)
+{
+  const int channels = image.channels();
+  const int x0 = (image.cols - out.width * kx) / 2;
+  const int y0 = (image.rows - out.height * ky) / 2;
+  const int row_values = out.width * kx * channels;
+  const int window_values = row_values - (kx - 1) * channels;  // positions with kx pixels to their right
+  // Padded so that the last group of kLanes positions reads and writes inside (the padding is never emitted).
+  std::vector<Sum> column_sums(row_values + kLanes, 0), block_sums(window_values + kLanes);
+  Sum* columns = column_sums.data();
+  Sum* blocks = block_sums.data();
+  for (int oy = 0; oy < out.height; ++oy)
+  {
+    const auto row = [&](int dy) { return image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels; };
+    std::fill(columns, columns + row_values, Sum(0));
+    int dy = 0;
+    for (; dy + 1 < ky; dy += 2)
+      addRowsTo(columns, row(dy), row(dy + 1), row_values);
+    if (dy < ky)
+      addRowsTo(columns, row(dy), nullptr, row_values);
+    windowSumsOf(columns, window_values, kx, channels, blocks);
+    emit(oy, static_cast<const Sum*>(blocks));
+  }
+}
+
 template <typename Sum>
 void decimateWith(const cv::Mat& image, int kx, int ky, cv::Mat& out)
 {
   const int channels = image.channels();
-  const int x0 = (image.cols - out.cols * kx) / 2;
-  const int y0 = (image.rows - out.rows * ky) / 2;
-  const int row_values = out.cols * kx * channels;
-  const int window_values = row_values - (kx - 1) * channels;  // positions with kx pixels to their right
-  const uint32_t count = uint32_t(kx) * uint32_t(ky);
-  const double inverse = 1.0 / double(count);
-  std::vector<Sum> column_sums(row_values), block_sums(window_values);
-  Sum* columns = column_sums.data();
-  Sum* blocks = block_sums.data();
-  for (int oy = 0; oy < out.rows; ++oy)
-  {
-    const uint8_t* first = image.ptr<uint8_t>(y0 + oy * ky) + x0 * channels;
-    for (int i = 0; i < row_values; ++i)
-      columns[i] = first[i];
-    for (int dy = 1; dy < ky; ++dy)
-    {
-      const uint8_t* in = image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels;
-      for (int i = 0; i < row_values; ++i)
-        columns[i] = static_cast<Sum>(columns[i] + in[i]);
-    }
-    for (int i = 0; i < window_values; ++i)
-      blocks[i] = columns[i];
-    for (int dx = 1; dx < kx; ++dx)
-    {
-      const Sum* shifted = columns + dx * channels;
-      for (int i = 0; i < window_values; ++i)
-        blocks[i] = static_cast<Sum>(blocks[i] + shifted[i]);
-    }
-    uint8_t* o = out.ptr<uint8_t>(oy);
-    for (int ox = 0; ox < out.cols; ++ox)
-      for (int c = 0; c < channels; ++c)  // round half up
-        o[ox * channels + c] = static_cast<uint8_t>(double(blocks[ox * kx * channels + c] + count / 2) * inverse);
-  }
+  const RoundedMean<Sum> mean(uint32_t(kx) * uint32_t(ky));
+  blockSums<Sum>(image, kx, ky, out.size(),
+                 [&](int oy, const Sum* blocks)
+                 {
+                   uint8_t* o = out.ptr<uint8_t>(oy);
+                   for (int ox = 0; ox < out.cols; ++ox)
+                     for (int c = 0; c < channels; ++c)
+                       o[ox * channels + c] = mean(blocks[ox * kx * channels + c]);
+                 });
 }
-}  // namespace
 
-cv::Mat decimate(const cv::Mat& image, int kx, int ky)
+/// decimateWith, then grey: the per-pixel conversion on the few pixels left, without the colour image.
+template <typename Sum>
+void decimateGreyWith(const cv::Mat& image, int kx, int ky, cv::Mat& out)
+{
+  const int step = kx * image.channels();
+  const RoundedMean<Sum> mean(uint32_t(kx) * uint32_t(ky));
+  blockSums<Sum>(image, kx, ky, out.size(),
+                 [&](int oy, const Sum* blocks)
+                 {
+                   uint8_t* o = out.ptr<uint8_t>(oy);
+                   for (int ox = 0; ox < out.cols; ++ox, blocks += step)
+                     o[ox] = grey(mean(blocks[0]), mean(blocks[1]), mean(blocks[2]));
+                 });
+}
+
+void checkDecimation(const cv::Mat& image, int kx, int ky)
 {
   if (image.empty() || image.depth() != CV_8U || image.channels() > 4)
     throw Error("decimate needs an 8-bit image of 1 to 4 channels");
   if (kx < 1 || ky < 1 || kx > image.cols || ky > image.rows)
     throw Error("decimate needs block sides between 1 and the image size");
+}
+
+bool fitsSixteenBits(int kx, int ky)
+{
+  return uint64_t(kx) * uint64_t(ky) * 255 + uint64_t(kx) * uint64_t(ky) / 2 <= UINT16_MAX;
+}
+
+/// The largest block sides that keep at least `target` pixels.
+cv::Size factorsTowards(const cv::Mat& image, cv::Size target)
+{
+  if (target.width <= 0 || target.height <= 0)
+    throw Error("area downsampling needs a positive target size");
+  return cv::Size(std::max(1, image.cols / target.width), std::max(1, image.rows / target.height));
+}
+}  // namespace
+
+cv::Mat decimate(const cv::Mat& image, int kx, int ky)
+{
+  checkDecimation(image, kx, ky);
   cv::Mat out(image.rows / ky, image.cols / kx, image.type());
-  if (uint64_t(kx) * uint64_t(ky) * 255 + uint64_t(kx) * uint64_t(ky) / 2 <= UINT16_MAX)
+  if (fitsSixteenBits(kx, ky))
     decimateWith<uint16_t>(image, kx, ky, out);
   else
     decimateWith<uint32_t>(image, kx, ky, out);
   return out;
 }
 
+cv::Mat decimateGrey(const cv::Mat& image, int kx, int ky)
+{
+  checkDecimation(image, kx, ky);
+  if (image.channels() == 1)
+    return decimate(image, kx, ky);
+  if (image.channels() == 2)
+    throw Error("decimateGrey needs a grey, BGR or BGRA image");
+  cv::Mat out(image.rows / ky, image.cols / kx, CV_8UC1);
+  if (fitsSixteenBits(kx, ky))
+    decimateGreyWith<uint16_t>(image, kx, ky, out);
+  else
+    decimateGreyWith<uint32_t>(image, kx, ky, out);
+  return out;
+}
+
 cv::Mat decimateTowards(const cv::Mat& image, cv::Size target)
 {
-  if (target.width <= 0 || target.height <= 0)
-    throw Error("area downsampling needs a positive target size");
-  const int kx = std::max(1, image.cols / target.width);
-  const int ky = std::max(1, image.rows / target.height);
-  return kx == 1 && ky == 1 ? image : decimate(image, kx, ky);
+  const cv::Size k = factorsTowards(image, target);
+  return k.width == 1 && k.height == 1 ? image : decimate(image, k.width, k.height);
+}
+
+cv::Mat decimateGreyTowards(const cv::Mat& image, cv::Size target)
+{
+  const cv::Size k = factorsTowards(image, target);
+  if (k.width > 1 || k.height > 1)
+    return decimateGrey(image, k.width, k.height);
+  if (image.channels() == 1)
+    return image;
+  cv::Mat out;
+  cv::cvtColor(image, out, image.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+  return out;
 }
 
 cv::Mat areaDownsample(const cv::Mat& image, cv::Size target)

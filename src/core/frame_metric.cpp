@@ -85,4 +85,17 @@ void FrameMetric::row(const uint64_t* query, const uint64_t* rows, size_t count,
     out[i] = distance(query, rows + i * stride);
 }
 
+void FrameMetric::rowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                                size_t count, int32_t* out) const
+{
+  const size_t stride = layout_.frameWords();
+  if (layout_.binary && layout_.blocks == 1)
+  {
+    hammingRowDifference(qa, rows_a, qb, rows_b, stride, stride, count, out);
+    return;
+  }
+  for (size_t i = 0; i < count; ++i)
+    out[i] = int32_t(distance(qa, rows_a + i * stride)) - int32_t(distance(qb, rows_b + i * stride));
+}
+
 }  // namespace openable

@@ -126,56 +126,88 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) uint32_t pairAvx512(const uin
   return pairAvx512Inline(a, b, words);
 }
 
-// Packed rows of at most 8 words (HOG-B: 6): eight rows are W whole vectors. Their per-word bit counts become
-// bytes, joined in registers; one permutation (VBMI) lays each row's bytes into its own 8-byte group with
-// zeros around them, and one vpsadbw sums every group: eight distances with one horizontal step instead of
-// eight reductions. W is a template parameter so that the joins are fixed instructions.
+// Packed rows of at most 8 words (HOG-B: 6): eight rows are W whole vectors. The per-word bit counts (at most
+// 64, a byte) of vector j are shifted into byte j of every 64-bit lane and ORed together; one permutation (VBMI)
+// lays each row's W bytes into its own 8-byte group with zeros around them, and one vpsadbw sums every group:
+// eight distances with one horizontal step instead of eight reductions. W is a template parameter so that the
+// joins are fixed instructions.
+template <size_t W>
+struct PackedRows
+{
+  __m512i pattern[W];  ///< the query repeated over eight rows: vector j holds words 8j .. 8j + 7 of that pattern
+  __m512i gather;      ///< output byte 8r + t takes the count of word W r + t (t < W) ...
+  __mmask64 keep;      ///< ... and is zero for t >= W
+
+  __attribute__((target("avx512f,avx512bw"))) explicit PackedRows(const uint64_t* q)
+  {
+    for (size_t j = 0; j < W; ++j)
+    {
+      alignas(64) uint64_t lanes[8];
+      for (size_t k = 0; k < 8; ++k)
+        lanes[k] = q[(8 * j + k) % W];
+      pattern[j] = _mm512_load_si512(lanes);
+    }
+    alignas(64) uint8_t index[64];
+    keep = 0;
+    for (size_t r = 0; r < 8; ++r)
+      for (size_t t = 0; t < 8; ++t)
+      {
+        const size_t word = W * r + t;  // word 8j + i of the eight rows sits in byte 8i + j of the packed counts
+        index[8 * r + t] = static_cast<uint8_t>(t < W ? 8 * (word % 8) + word / 8 : 0);
+        keep |= __mmask64(t < W) << (8 * r + t);
+      }
+    gather = _mm512_load_si512(index);
+  }
+
+  /// Bit counts of the eight rows at `r` against the query, one byte per word (see gather).
+  __attribute__((target("avx512f,avx512vpopcntdq"))) __m512i counts(const uint64_t* r) const
+  {
+    __m512i packed = _mm512_setzero_si512();
+    for (size_t j = 0; j < W; ++j)
+      packed = _mm512_or_si512(
+          packed,
+          _mm512_slli_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(_mm512_loadu_si512(r + 8 * j), pattern[j])), 8 * j));
+    return packed;
+  }
+
+  /// The eight 64-bit sums of the bytes of each row (bytes as counts() lays them out).
+  __attribute__((target("avx512f,avx512bw,avx512vbmi"))) __m256i sums(__m512i bytes) const
+  {
+    return _mm512_cvtepi64_epi32(
+        _mm512_sad_epu8(_mm512_maskz_permutexvar_epi8(keep, gather, bytes), _mm512_setzero_si512()));
+  }
+};
+
 template <size_t W>
 __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowAvx512Packed(const uint64_t* q,
                                                                                             const uint64_t* rows,
                                                                                             size_t count, uint32_t* out)
 {
-  // The query repeated over eight rows: vector j holds words 8j .. 8j + 7 of that pattern.
-  __m512i pattern[W];
-  for (size_t j = 0; j < W; ++j)
-  {
-    alignas(64) uint64_t lanes[8];
-    for (size_t k = 0; k < 8; ++k)
-      lanes[k] = q[(8 * j + k) % W];
-    pattern[j] = _mm512_load_si512(lanes);
-  }
-  // Output byte 8r + t takes byte r * W + t (t < W) of the counts; the others are zeroed.
-  alignas(64) uint8_t index[64];
-  uint64_t keep = 0;
-  for (size_t r = 0; r < 8; ++r)
-    for (size_t t = 0; t < 8; ++t)
-    {
-      index[8 * r + t] = static_cast<uint8_t>(t < W ? r * W + t : 0);
-      keep |= uint64_t(t < W) << (8 * r + t);
-    }
-  const __m512i gather = _mm512_load_si512(index);
+  const PackedRows<W> packed(q);
+  size_t i = 0;
+  for (; i + 8 <= count; i += 8)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), packed.sums(packed.counts(rows + i * W)));
+  for (; i < count; ++i)
+    out[i] = pairAvx512Inline(q, rows + i * W, W);
+}
+
+// The difference of two rows' distances with one reduction: per word, count_a + 64 - count_b lies in 0 .. 128
+// (a byte), so the bytes are subtracted before the horizontal sum and the bias 64 W after it.
+template <size_t W>
+__attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowDifferenceAvx512Packed(
+    const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b, size_t count, int32_t* out)
+{
+  const PackedRows<W> a(qa), b(qb);
+  const __m512i bias = _mm512_set1_epi8(64);
+  const __m256i total_bias = _mm256_set1_epi32(64 * W);
   size_t i = 0;
   for (; i + 8 <= count; i += 8)
   {
-    const uint64_t* r = rows + i * W;
-    __m128i bytes[8];
-    for (size_t j = 0; j < 8; ++j)
-      bytes[j] = j < W ? _mm512_cvtepi64_epi8(_mm512_popcnt_epi64(
-                             _mm512_xor_si512(_mm512_loadu_si512(r + 8 * j), pattern[j < W ? j : 0])))
-                       : _mm_setzero_si128();
-    __m512i counts = _mm512_castsi128_si512(_mm_unpacklo_epi64(bytes[0], bytes[1]));
-    if (W > 2)
-      counts = _mm512_inserti32x4(counts, _mm_unpacklo_epi64(bytes[2], bytes[3]), 1);
-    if (W > 4)
-      counts = _mm512_inserti32x4(counts, _mm_unpacklo_epi64(bytes[4], bytes[5]), 2);
-    if (W > 6)
-      counts = _mm512_inserti32x4(counts, _mm_unpacklo_epi64(bytes[6], bytes[7]), 3);
-    const __m512i grouped = _mm512_maskz_permutexvar_epi8(keep, gather, counts);
-    const __m512i sums = _mm512_sad_epu8(grouped, _mm512_setzero_si512());
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), _mm512_cvtepi64_epi32(sums));
+    const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(rows_a + i * W), bias), b.counts(rows_b + i * W));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), _mm256_sub_epi32(a.sums(bytes), total_bias));
   }
   for (; i < count; ++i)
-    out[i] = pairAvx512Inline(q, rows + i * W, W);
+    out[i] = int32_t(pairAvx512Inline(qa, rows_a + i * W, W)) - int32_t(pairAvx512Inline(qb, rows_b + i * W, W));
 }
 
 bool hasVbmi()
@@ -226,16 +258,80 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t
     out[i] = static_cast<uint32_t>(_mm512_reduce_add_epi64(total));
   }
 }
+__attribute__((target("avx512f,avx512vpopcntdq"))) void rowDifferenceAvx512(const uint64_t* qa, const uint64_t* rows_a,
+                                                                            const uint64_t* qb, const uint64_t* rows_b,
+                                                                            size_t stride, size_t words, size_t count,
+                                                                            int32_t* out)
+{
+  if (words >= 1 && words <= 8 && stride == words && hasVbmi())
+  {
+    using Packed = void (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, int32_t*);
+    static const Packed packed[9] = {nullptr,
+                                     rowDifferenceAvx512Packed<1>,
+                                     rowDifferenceAvx512Packed<2>,
+                                     rowDifferenceAvx512Packed<3>,
+                                     rowDifferenceAvx512Packed<4>,
+                                     rowDifferenceAvx512Packed<5>,
+                                     rowDifferenceAvx512Packed<6>,
+                                     rowDifferenceAvx512Packed<7>,
+                                     rowDifferenceAvx512Packed<8>};
+    packed[words](qa, rows_a, qb, rows_b, count, out);
+    return;
+  }
+  if (words > 24)
+  {
+    for (size_t i = 0; i < count; ++i)
+      out[i] = int32_t(pairAvx512Inline(qa, rows_a + i * stride, words)) -
+               int32_t(pairAvx512Inline(qb, rows_b + i * stride, words));
+    return;
+  }
+  // Up to three vectors (LDB: 22 words): both queries and the masks in registers, as in rowAvx512, and the
+  // two bit counts subtracted per lane before the one horizontal sum.
+  const auto maskFor = [words](size_t first) -> __mmask8 {
+    return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
+  };
+  const __mmask8 m0 = maskFor(0), m1 = maskFor(8), m2 = maskFor(16);
+  const __m512i a0 = _mm512_maskz_loadu_epi64(m0, qa), a1 = _mm512_maskz_loadu_epi64(m1, qa + 8),
+                a2 = _mm512_maskz_loadu_epi64(m2, qa + 16);
+  const __m512i b0 = _mm512_maskz_loadu_epi64(m0, qb), b1 = _mm512_maskz_loadu_epi64(m1, qb + 8),
+                b2 = _mm512_maskz_loadu_epi64(m2, qb + 16);
+  for (size_t i = 0; i < count; ++i)
+  {
+    const uint64_t* ra = rows_a + i * stride;
+    const uint64_t* rb = rows_b + i * stride;
+    __m512i d = _mm512_sub_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(a0, _mm512_maskz_loadu_epi64(m0, ra))),
+                                 _mm512_popcnt_epi64(_mm512_xor_si512(b0, _mm512_maskz_loadu_epi64(m0, rb))));
+    d = _mm512_add_epi64(
+        d, _mm512_sub_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(a1, _mm512_maskz_loadu_epi64(m1, ra + 8))),
+                            _mm512_popcnt_epi64(_mm512_xor_si512(b1, _mm512_maskz_loadu_epi64(m1, rb + 8)))));
+    d = _mm512_add_epi64(
+        d, _mm512_sub_epi64(_mm512_popcnt_epi64(_mm512_xor_si512(a2, _mm512_maskz_loadu_epi64(m2, ra + 16))),
+                            _mm512_popcnt_epi64(_mm512_xor_si512(b2, _mm512_maskz_loadu_epi64(m2, rb + 16)))));
+    out[i] = static_cast<int32_t>(_mm512_reduce_add_epi64(d));
+  }
+}
 #pragma GCC diagnostic pop
 #endif
 
 using PairFn = uint32_t (*)(const uint64_t*, const uint64_t*, size_t);
 using RowFn = void (*)(const uint64_t*, const uint64_t*, size_t, size_t, size_t, uint32_t*);
+using RowDifferenceFn = void (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t,
+                                 size_t, int32_t*);
+
+/// The difference of two rows through a kernel's pair function (the kernels without a fused one).
+template <PairFn pair>
+void rowDifferenceOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                     size_t stride, size_t words, size_t count, int32_t* out)
+{
+  for (size_t i = 0; i < count; ++i)
+    out[i] = int32_t(pair(qa, rows_a + i * stride, words)) - int32_t(pair(qb, rows_b + i * stride, words));
+}
 
 struct Kernel
 {
   PairFn pair;
   RowFn row;
+  RowDifferenceFn difference;
 };
 
 Kernel kernelFor(HammingKernel kernel)
@@ -244,14 +340,14 @@ Kernel kernelFor(HammingKernel kernel)
   {
 #ifdef OPENABLE_X86
     case HammingKernel::kPopcnt:
-      return {pairPopcnt, rowPopcnt};
+      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>};
     case HammingKernel::kAvx2:
-      return {pairAvx2, rowAvx2};
+      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>};
     case HammingKernel::kAvx512Vpopcntdq:
-      return {pairAvx512, rowAvx512};
+      return {pairAvx512, rowAvx512, rowDifferenceAvx512};
 #endif
     default:
-      return {pairPortable, rowPortable};
+      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>};
   }
 }
 
@@ -325,6 +421,18 @@ void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* row
                 size_t count, uint32_t* out)
 {
   checkedKernel(kernel).row(query, rows, stride, words, count, out);
+}
+
+void hammingRowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                          size_t stride, size_t words, size_t count, int32_t* out)
+{
+  best().difference(qa, rows_a, qb, rows_b, stride, words, count, out);
+}
+
+void hammingRowDifference(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
+                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, int32_t* out)
+{
+  checkedKernel(kernel).difference(qa, rows_a, qb, rows_b, stride, words, count, out);
 }
 
 float l2Distance(const float* a, const float* b, size_t length)

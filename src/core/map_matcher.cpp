@@ -44,11 +44,8 @@ size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, doubl
   return columns;
 }
 
-Candidate MapMatcher::candidateAt(const SessionMap& map, size_t entry) const
+Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_t column) const
 {
-  const auto session = static_cast<uint32_t>(std::upper_bound(offsets_.begin(), offsets_.end(), entry) -
-                                             offsets_.begin() - 1);
-  const size_t column = entry - offsets_[session];
   const SequenceMatcher& matcher = matchers_[session];
   const PlaceDatabase& frames = map.frames(session);
   Candidate c;
@@ -77,10 +74,19 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   while (matchers_.size() < map.sessionCount())
     matchers_.emplace_back(map.layout(), config_.sequence_length, config_.bidirectional);
 
-  // Every session's row, one after another (reused: no allocation of N floats per frame).
-  std::vector<float>& row = row_;
-  row.clear();
-  offsets_.clear();
+  // Top-k distinct places: each session's own (its matcher answers from what it summarised while
+  // matching: no pass over a row of N floats), then the best of them all. A uniqueness window never
+  // reaches into another session, so this picks exactly what one scan of all sessions' rows would.
+  Detection detection;
+  const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
+  const size_t window = static_cast<size_t>(std::max(0, config_.uniqueness_window));
+  struct Pick
+  {
+    float distance;
+    uint32_t session;
+    size_t column;
+  };
+  std::vector<Pick> picks;
   bool own_excluded = false;
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
   {
@@ -88,47 +94,18 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     const PlaceDatabase& frames = map.frames(s);
     const size_t columns = candidateColumns(frames, own, stamp);
     own_excluded = own_excluded || (own && columns == 0 && !frames.empty());
-    matchers_[s].match(query.data(), frames, columns);
-    offsets_.push_back(row.size());
-    if (s == 0)
-      matchers_[s].normalizedRow(row, nullptr, minTerms());  // the one session of a stream: no copy
-    else
-    {
-      matchers_[s].normalizedRow(session_row_, nullptr, minTerms());
-      row.insert(row.end(), session_row_.begin(), session_row_.end());
-    }
+    SequenceMatcher& matcher = matchers_[s];
+    matcher.match(query.data(), frames, columns);
+    detection.candidates += matcher.smallestDistinct(wanted, window, minTerms(), taken_);
+    for (size_t column : taken_)
+      picks.push_back({matcher.normalized(column, nullptr, minTerms()), s, column});
   }
-  offsets_.push_back(row.size());
-
-  // Top-k distinct places: repeatedly the smallest distance outside the windows of those already taken
-  // (a window never reaches into another session).
-  Detection detection;
-  const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
-  const size_t window = static_cast<size_t>(config_.uniqueness_window);
-  std::vector<size_t> taken;
-  while (taken.size() < wanted)
-  {
-    size_t best = row.size();
-    size_t finite = 0;
-    for (size_t c = 0; c < row.size(); ++c)
-      if (std::isfinite(row[c]))
-      {
-        ++finite;
-        if (best == row.size() || row[c] < row[best])
-          best = c;
-      }
-    if (taken.empty())
-      detection.candidates = finite;  // counted in the first scan: no extra pass over N
-    if (best == row.size())
-      break;
-    taken.push_back(best);
-    const auto session = std::upper_bound(offsets_.begin(), offsets_.end(), best) - 1;
-    const size_t from = std::max(*session, best > window ? best - window : 0);
-    const size_t to = std::min(*(session + 1), best + window + 1);
-    std::fill(row.begin() + static_cast<long>(from), row.begin() + static_cast<long>(to), std::nanf(""));
-  }
-  for (size_t i = 0; i < taken.size() && i < static_cast<size_t>(config_.top_k); ++i)
-    detection.top.push_back(candidateAt(map, taken[i]));
+  // By distance; ties to the earlier session, then the lower column (as one scan would).
+  std::stable_sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance < b.distance; });
+  if (picks.size() > wanted)
+    picks.resize(wanted);
+  for (size_t i = 0; i < picks.size() && i < static_cast<size_t>(config_.top_k); ++i)
+    detection.top.push_back(candidateAt(map, picks[i].session, picks[i].column));
 
   // No candidate although the stream's own past exists and nothing else is in the map: the exclusion.
   detection.excluded = detection.top.empty() && own_excluded &&
@@ -137,11 +114,11 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   {
     detection.has_candidates = true;
     detection.best = detection.top.front();
-    if (taken.size() < 2)
+    if (picks.size() < 2)
       detection.uniqueness = 1.0f;
     else
     {
-      const float second = candidateAt(map, taken[1]).distance;
+      const float second = picks[1].distance;
       detection.uniqueness = second > 0.0f ? 1.0f - detection.best.distance / second : 0.0f;
     }
     // At least one gate must be on: with neither a threshold nor a uniqueness bound, nothing is accepted.

@@ -118,11 +118,14 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
     throw Error("image of " + describeMat(image) + " is too small for " + std::to_string(across) + "x" +
                 std::to_string(down) + " cells (panoramas x grid); expected at least one pixel per cell");
   // Area averaging of the pixels under each patch pixel, in two steps (area_downsample.h): the exact integer
-  // decimation of the 8-bit image first, one pass over its bytes; then the per-pixel work (grey conversion,
-  // logarithms) on the few pixels left, and the small area step to the patch size on one channel.
+  // decimation of the 8-bit image first, one pass over its bytes, converting to grey as it goes; then the
+  // per-pixel work (logarithms) on the few pixels left, and the small area step to the patch size on one
+  // channel.
   const int p = config_.patch_size;
   const cv::Size target(across * p, down * p);
-  cv::Mat small = toOneChannel(decimateTowards(image, target), config_.illumination_invariance, config_.alpha);
+  cv::Mat small = config_.illumination_invariance
+                      ? illuminationInvariant(decimateTowards(image, target), config_.alpha)
+                      : toOneChannel(decimateGreyTowards(image, target), false, config_.alpha);
   if (small.size() != target)
     cv::resize(small, small, target, 0, 0, cv::INTER_AREA);
   return split(normalizeBlocks(small, config_.patch_normalization), cv::Mat(), across);

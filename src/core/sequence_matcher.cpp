@@ -12,24 +12,30 @@ namespace openable
 namespace
 {
 /// Columns processed together: their descriptors (and those L frames earlier) stay in cache between the
-/// two distance computations of the recurrence.
+/// two distance computations of the recurrence, and each chunk gets one summary for smallestDistinct().
 constexpr size_t kChunk = 256;
 
-/// True when every count equals `full`: the chains of a chunk are all complete (the steady state).
-bool allFull(const uint16_t* counts, size_t n, uint16_t full)
+/// True when every count equals `value`.
+bool allEqual(const uint16_t* counts, size_t n, uint16_t value)
 {
-  bool all = true;
+  uint16_t differences = 0;
   for (size_t i = 0; i < n; ++i)
-    all &= counts[i] == full;  // no early exit: the loop vectorises
-  return all;
+    differences |= counts[i] ^ value;  // no early exit and no bool: the loop vectorises
+  return differences == 0;
 }
 
-/// The steady-state recurrence, branch-free so that it vectorises: next = previous + entering - leaving.
-void addAndDrop(const uint32_t* __restrict previous, const uint32_t* __restrict entering,
-                const uint32_t* __restrict leaving, size_t n, uint32_t* __restrict next)
+/// out[i] = previous[i] + change[i] for i < n, and their minimum: the steady-state recurrence, branch-free so
+/// that it vectorises. The sums are exact: a chain's sum minus its leaving term is never negative.
+uint32_t addChanges(const uint32_t* __restrict previous, const int32_t* __restrict change, size_t n,
+                    uint32_t* __restrict out)
 {
+  uint32_t minimum = UINT32_MAX;
   for (size_t i = 0; i < n; ++i)
-    next[i] = previous[i] + entering[i] - leaving[i];
+  {
+    out[i] = previous[i] + static_cast<uint32_t>(change[i]);
+    minimum = std::min(minimum, out[i]);
+  }
+  return minimum;
 }
 }  // namespace
 
@@ -37,6 +43,11 @@ SequenceMatcher::SequenceMatcher(const DescriptorLayout& layout, int sequence_le
   : metric_(layout), sequence_length_(1), bidirectional_(bidirectional)
 {
   setSequenceLength(sequence_length);
+  entering_.resize(kChunk);
+  leaving_.resize(kChunk);
+  change_.resize(kChunk);
+  previous_.sum.resize(kChunk);
+  previous_.count.resize(kChunk);
 }
 
 void SequenceMatcher::setSequenceLength(int sequence_length)
@@ -56,6 +67,7 @@ void SequenceMatcher::setSequenceLength(int sequence_length)
   std::fill(forward_.count.begin(), forward_.count.end(), uint16_t(0));
   std::fill(reverse_.sum.begin(), reverse_.sum.end(), 0u);
   std::fill(reverse_.count.begin(), reverse_.count.end(), uint16_t(0));
+  summaries_.clear();
   // Chains restart: the ring no longer holds the frames that would leave them. Count queries from here.
   queries_ = 0;
 }
@@ -68,6 +80,7 @@ void SequenceMatcher::setBidirectional(bool bidirectional)
     reverse_.count.assign(forward_.count.size(), 0);
   }
   bidirectional_ = bidirectional;
+  summaries_.clear();
 }
 
 void SequenceMatcher::reset()
@@ -76,6 +89,7 @@ void SequenceMatcher::reset()
   first_id_ = 0;
   forward_ = Chains();
   reverse_ = Chains();
+  summaries_.clear();
 }
 
 const uint64_t* SequenceMatcher::recentQuery(size_t age) const
@@ -83,6 +97,11 @@ const uint64_t* SequenceMatcher::recentQuery(size_t age) const
   const size_t slots = sequence_length_ + 1;
   const uint64_t index = queries_ - 1 - age;  // queries_ - 1 is the current query
   return recent_.data() + (index % slots) * metric_.layout().frameWords();
+}
+
+float SequenceMatcher::meanTerm(uint32_t sum, uint16_t count) const
+{
+  return static_cast<float>(sum / (count * double(metric_.layout().maxFrameDistance())));
 }
 
 void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates)
@@ -94,10 +113,14 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
   std::memcpy(recent_.data() + (queries_ % (sequence_length_ + 1)) * words, query, sizeof(uint64_t) * words);
   ++queries_;
 
+  // The previous frame's summaries say which chunks held only full chains, so that their counts need not be
+  // read again. Valid while the columns stay where they were (cleared when the chains restart).
+  previous_summaries_.swap(summaries_);
   // Frames evicted from the front of the reference take their columns with them.
   const uint64_t new_first = reference.firstId();
   if (new_first != first_id_)
   {
+    previous_summaries_.clear();
     const size_t gone = static_cast<size_t>(std::min<uint64_t>(new_first - first_id_, forward_.sum.size()));
     for (Chains* chains : {&forward_, &reverse_})
     {
@@ -107,144 +130,202 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
     }
     first_id_ = new_first;
   }
-  // The reverse pass reuses this frame's distances; without it they live only chunk by chunk.
-  current_distances_.resize(bidirectional_ ? candidates : kChunk);
-  advanceForward(reference, candidates);
-  if (bidirectional_)
-    advanceReverse(reference, candidates);
-}
 
-void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t columns)
-{
-  const size_t L = sequence_length_;
-  const Chains& old = forward_;  // the previous frame's chains; columns that did not exist have count 0
-  Chains& next = next_;
-  next.sum.resize(columns);
-  next.count.resize(columns);
-  // With L = 1 every sequence is the current frame alone: nothing to carry over or drop.
-  const bool can_drop = queries_ > L && L > 1;  // the query L frames ago exists
-  const uint64_t* query = recentQuery(0);
-  const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
-  dropped_distances_.resize(kChunk);
-
-  // Ascending: the descriptors L frames back, needed for the leaving term, were read one or two chunks
-  // ago and are still in cache, so the history is streamed from memory only once per frame.
+  // The chains are updated in place, one chunk of columns after the other, both directions in the same pass
+  // over the descriptors. Columns that did not exist in the previous frame start with count 0 (no chain).
+  const size_t columns = candidates;
+  const size_t old_forward_columns = forward_.count.size();
+  forward_.sum.resize(columns);
+  forward_.count.resize(columns);
+  const size_t old_reverse_columns = reverse_.count.size();
+  if (bidirectional_ && old_reverse_columns < columns)
+  {
+    reverse_.sum.resize(columns);
+    reverse_.count.resize(columns);
+  }
+  summaries_.assign((columns + kChunk - 1) / kChunk, ChunkSummary());
+  const auto wasFull = [&](size_t chunk)
+  { return chunk < previous_summaries_.size() && previous_summaries_[chunk].full; };
+  Carry carry;  // column -1 has no chain
   for (size_t begin = 0; begin < columns; begin += kChunk)
   {
     const size_t end = std::min(columns, begin + kChunk);
-    uint32_t* current = current_distances_.data() + (bidirectional_ ? begin : 0);  // current[c - begin]
-    metric_.row(query, reference.descriptor(begin), end - begin, current);
-    const size_t drop_begin = std::max(begin, L);  // d(t - L, j - L) where j - L is stored
-    if (can_drop && drop_begin < end)
-      metric_.row(leaving_query, reference.descriptor(drop_begin - L), end - drop_begin,
-                  dropped_distances_.data() + (drop_begin - begin));
-    if (can_drop && begin >= L && end <= old.count.size() && allFull(old.count.data() + begin - 1, end - begin, L))
-    {
-      addAndDrop(old.sum.data() + begin - 1, current, dropped_distances_.data(), end - begin, next.sum.data() + begin);
-      std::fill(next.count.begin() + long(begin), next.count.begin() + long(end), static_cast<uint16_t>(L));
-      continue;
-    }
-    for (size_t c = begin; c < end; ++c)
-    {
-      const uint16_t previous_count = (L > 1 && c > 0 && c - 1 < old.count.size()) ? old.count[c - 1] : 0;
-      const uint32_t entering = current[c - begin];
-      if (previous_count == 0)
-      {
-        next.sum[c] = entering;
-        next.count[c] = 1;
-      }
-      else if (previous_count < L)
-      {
-        next.sum[c] = old.sum[c - 1] + entering;
-        next.count[c] = previous_count + 1;
-      }
-      else if (c >= L && can_drop)
-      {
-        next.sum[c] = old.sum[c - 1] + entering - dropped_distances_[c - begin];
-        next.count[c] = static_cast<uint16_t>(L);
-      }
-      else
-      {
-        // The frame leaving the sequence was evicted from a bounded history: the chain starts again.
-        next.sum[c] = entering;
-        next.count[c] = 1;
-      }
-    }
+    const size_t chunk = begin / kChunk;
+    ChunkSummary& summary = summaries_[chunk];
+    // Forward chains continue columns begin - 1 .. end - 2 (the first one is the carry's), reverse ones
+    // columns begin + 1 .. end (the last one in the next chunk).
+    advanceForward(reference, begin, end, wasFull(chunk) && end - 1 <= old_forward_columns, carry, summary);
+    if (bidirectional_)
+      advanceReverse(reference, begin, end, old_reverse_columns, wasFull(chunk) && wasFull(chunk + 1), summary);
   }
-  std::swap(forward_, next_);
+  if (bidirectional_)
+  {
+    // Only now: the reverse chain of the last column continued the previous frame's of the next one.
+    reverse_.sum.resize(columns);
+    reverse_.count.resize(columns);
+  }
 }
 
-void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t columns)
+// S_t[j] = S_{t-1}[j - 1] + d(t, j) - d(t - L, j - L), in place: column j takes the old sum of j - 1, so the
+// old values of the chunk are copied aside first (one chunk, in cache) and the old value of the chunk's last
+// column is carried to the next chunk, whose first column needs it. Ascending: the descriptors L columns
+// back, read for the leaving term, were read one or two chunks ago and are still in cache, so the history is
+// streamed from memory once per frame.
+void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begin, size_t end, bool was_full,
+                                     Carry& carry, ChunkSummary& summary)
 {
   const size_t L = sequence_length_;
-  const Chains& old = reverse_;
-  Chains& next = next_;
-  next.sum.resize(columns);
-  next.count.resize(columns);
+  const size_t n = end - begin;
+  uint32_t* sum = forward_.sum.data();
+  uint16_t* count = forward_.count.data();
+  const uint64_t* query = recentQuery(0);
+  const Carry before = carry;
+  carry = Carry{sum[end - 1], count[end - 1]};
+
+  if (L == 1)
+  {
+    // Every sequence is the current frame alone: nothing to carry over or drop.
+    metric_.row(query, reference.descriptor(begin), n, sum + begin);
+    std::fill(count + begin, count + end, uint16_t(1));
+    summary.minimum = *std::min_element(sum + begin, sum + end);
+    summary.full = true;
+    return;
+  }
+  const bool can_drop = queries_ > L;  // the query L frames ago exists
+  const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
+  uint32_t* previous_sum = previous_.sum.data();
+  previous_sum[0] = before.sum;
+  std::memcpy(previous_sum + 1, sum + begin, sizeof(uint32_t) * (n - 1));
+
+  // The steady state: every chain of the previous frame's columns begin - 1 .. end - 2 was full, so every new
+  // one is. One fused pass computes entering minus leaving terms; the counts stay L (only the last column's
+  // is new: the others already held L).
+  if (can_drop && begin >= L && before.count == L &&
+      (was_full || allEqual(count + begin, n - 1, static_cast<uint16_t>(L))))
+  {
+    metric_.rowDifference(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin - L), n,
+                          change_.data());
+    summary.minimum = addChanges(previous_sum, change_.data(), n, sum + begin);
+    summary.full = true;
+    count[end - 1] = static_cast<uint16_t>(L);
+    return;
+  }
+
+  uint16_t* previous_count = previous_.count.data();
+  previous_count[0] = before.count;
+  std::memcpy(previous_count + 1, count + begin, sizeof(uint16_t) * (n - 1));
+  uint32_t* entering = entering_.data();
+  metric_.row(query, reference.descriptor(begin), n, entering);
+  const size_t drop_begin = std::max(begin, L);  // d(t - L, j - L) where j - L is stored
+  if (can_drop && drop_begin < end)
+    metric_.row(leaving_query, reference.descriptor(drop_begin - L), end - drop_begin,
+                leaving_.data() + (drop_begin - begin));
+  summary.full = false;
+  for (size_t i = 0; i < n; ++i)
+  {
+    const size_t c = begin + i;
+    if (previous_count[i] == 0)
+    {
+      sum[c] = entering[i];
+      count[c] = 1;
+    }
+    else if (previous_count[i] < L)
+    {
+      sum[c] = previous_sum[i] + entering[i];
+      count[c] = previous_count[i] + 1;
+    }
+    else if (c >= L && can_drop)
+    {
+      sum[c] = previous_sum[i] + entering[i] - leaving_[i];
+      count[c] = static_cast<uint16_t>(L);
+    }
+    else
+    {
+      // The frame leaving the sequence was evicted from a bounded history: the chain starts again.
+      sum[c] = entering[i];
+      count[c] = 1;
+    }
+  }
+}
+
+// R_t[j] = R_{t-1}[j + 1] + d(t, j) - d(t - L, j + L), in place: column j takes the old sum of j + 1, which
+// ascending order has not overwritten yet (the next chunk's first column included). The leaving descriptors
+// L columns ahead come from memory here and are in cache when the forward pass reaches them.
+void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t begin, size_t end, size_t old_columns,
+                                     bool was_full, ChunkSummary& summary)
+{
+  const size_t L = sequence_length_;
+  const size_t n = end - begin;
   const size_t stored = reference.size();
   const bool can_drop = queries_ > L;
+  const uint64_t* query = recentQuery(0);
   const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
-  const uint32_t* current = current_distances_.data();
-  dropped_distances_.resize(kChunk);
+  const size_t drop_end = std::min(end, stored > L ? stored - L : 0);  // d(t - L, j + L) where j + L is stored
+  uint32_t* sum = reverse_.sum.data();
+  uint16_t* count = reverse_.count.data();
+  uint32_t* previous_sum = previous_.sum.data();
+  uint16_t* previous_count = previous_.count.data();
 
-  // R_t[j] = R_{t-1}[j + 1] + d(t, j) - d(t - L, j + L). Descending, so that the descriptors L frames
-  // ahead were read one or two chunks ago.
-  for (size_t end = columns; end > 0;)
+  if (can_drop && end <= drop_end && end < old_columns &&
+      (was_full || allEqual(count + begin + 1, n, static_cast<uint16_t>(L))))
   {
-    const size_t begin = end > kChunk ? end - kChunk : 0;
-    const size_t drop_end = std::min(end, stored > L ? stored - L : 0);
-    if (can_drop && begin < drop_end)
-      metric_.row(leaving_query, reference.descriptor(begin + L), drop_end - begin, dropped_distances_.data());
-    if (can_drop && end <= drop_end && end < old.count.size() && allFull(old.count.data() + begin + 1, end - begin, L))
-    {
-      addAndDrop(old.sum.data() + begin + 1, current + begin, dropped_distances_.data(), end - begin,
-                 next.sum.data() + begin);
-      std::fill(next.count.begin() + long(begin), next.count.begin() + long(end), static_cast<uint16_t>(L));
-      end = begin;
-      continue;
-    }
-    for (size_t c = begin; c < end; ++c)
-    {
-      const uint16_t previous_count = c + 1 < old.count.size() ? old.count[c + 1] : 0;
-      if (previous_count == 0)
-      {
-        next.sum[c] = current[c];
-        next.count[c] = 1;
-      }
-      else if (previous_count < L)
-      {
-        next.sum[c] = old.sum[c + 1] + current[c];
-        next.count[c] = previous_count + 1;
-      }
-      else if (c < drop_end && can_drop)
-      {
-        next.sum[c] = old.sum[c + 1] + current[c] - dropped_distances_[c - begin];
-        next.count[c] = static_cast<uint16_t>(L);
-      }
-      else
-      {
-        next.sum[c] = current[c];
-        next.count[c] = 1;
-      }
-    }
-    end = begin;
+    metric_.rowDifference(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin + L), n,
+                          change_.data());
+    std::memcpy(previous_sum, sum + begin + 1, sizeof(uint32_t) * n);
+    summary.minimum = std::min(summary.minimum, addChanges(previous_sum, change_.data(), n, sum + begin));
+    count[begin] = static_cast<uint16_t>(L);
+    return;
   }
-  std::swap(reverse_, next_);
+
+  summary.full = false;
+  uint32_t* entering = entering_.data();
+  metric_.row(query, reference.descriptor(begin), n, entering);
+  if (can_drop && begin < drop_end)
+    metric_.row(leaving_query, reference.descriptor(begin + L), drop_end - begin, leaving_.data());
+  for (size_t i = 0; i < n; ++i)
+  {
+    const size_t c = begin + i;
+    previous_count[i] = c + 1 < old_columns ? count[c + 1] : 0;
+    previous_sum[i] = c + 1 < old_columns ? sum[c + 1] : 0;
+  }
+  for (size_t i = 0; i < n; ++i)
+  {
+    const size_t c = begin + i;
+    if (previous_count[i] == 0)
+    {
+      sum[c] = entering[i];
+      count[c] = 1;
+    }
+    else if (previous_count[i] < L)
+    {
+      sum[c] = previous_sum[i] + entering[i];
+      count[c] = previous_count[i] + 1;
+    }
+    else if (c < drop_end && can_drop)
+    {
+      sum[c] = previous_sum[i] + entering[i] - leaving_[i];
+      count[c] = static_cast<uint16_t>(L);
+    }
+    else
+    {
+      sum[c] = entering[i];
+      count[c] = 1;
+    }
+  }
 }
 
 float SequenceMatcher::normalized(size_t column, int* direction, int min_terms) const
 {
-  const double max_distance = double(metric_.layout().maxFrameDistance());
   const int needed = std::max(1, min_terms);
   const uint16_t n = forward_.count[column];
-  float best = n >= needed ? static_cast<float>(forward_.sum[column] / (n * max_distance)) : std::nanf("");
+  float best = n >= needed ? meanTerm(forward_.sum[column], n) : std::nanf("");
   int dir = 1;
   if (bidirectional_)
   {
     const uint16_t r = reverse_.count[column];
     if (r >= needed)
     {
-      const float reverse = static_cast<float>(reverse_.sum[column] / (r * max_distance));
+      const float reverse = meanTerm(reverse_.sum[column], r);
       if (!(reverse >= best))  // also when best is NaN
       {
         best = reverse;
@@ -269,6 +350,77 @@ void SequenceMatcher::normalizedRow(std::vector<float>& out, std::vector<int8_t>
     if (directions)
       (*directions)[c] = static_cast<int8_t>(dir);
   }
+}
+
+float SequenceMatcher::chunkMinimum(size_t chunk, int min_terms, const std::vector<size_t>& taken, size_t window,
+                                    size_t* finite) const
+{
+  const size_t begin = chunk * kChunk;
+  const size_t end = std::min(columns(), begin + kChunk);
+  const auto masked = [&](size_t c)
+  {
+    for (size_t t : taken)
+      if (c + window >= t && c <= t + window)
+        return true;
+    return false;
+  };
+  bool any_masked = false;
+  for (size_t t : taken)
+    any_masked |= t + window >= begin && t <= end - 1 + window;
+  // A full chunk's smallest normalized distance is that of its smallest sum (all have L terms, and the
+  // division is monotonic): the same float a scan of the chunk would find.
+  if (!any_masked && chunk < summaries_.size() && summaries_[chunk].full && sequence_length_ >= std::max(1, min_terms))
+  {
+    if (finite)
+      *finite += end - begin;
+    return meanTerm(summaries_[chunk].minimum, static_cast<uint16_t>(sequence_length_));
+  }
+  float best = std::nanf("");
+  for (size_t c = begin; c < end; ++c)
+  {
+    if (any_masked && masked(c))
+      continue;
+    const float d = normalized(c, nullptr, min_terms);
+    if (!std::isfinite(d))
+      continue;
+    if (finite)
+      ++*finite;
+    if (!(d >= best))  // also when best is NaN
+      best = d;
+  }
+  return best;
+}
+
+size_t SequenceMatcher::smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& taken) const
+{
+  taken.clear();
+  const size_t chunks = (columns() + kChunk - 1) / kChunk;
+  std::vector<float> minimum(chunks);
+  size_t finite = 0;
+  for (size_t k = 0; k < chunks; ++k)
+    minimum[k] = chunkMinimum(k, min_terms, taken, window, &finite);
+  while (taken.size() < count)
+  {
+    // The first chunk holding the smallest distance holds the first column with it.
+    size_t best = chunks;
+    for (size_t k = 0; k < chunks; ++k)
+      if (std::isfinite(minimum[k]) && (best == chunks || minimum[k] < minimum[best]))
+        best = k;
+    if (best == chunks)
+      break;
+    const auto masked = [&](size_t c)
+    { return std::any_of(taken.begin(), taken.end(), [&](size_t t) { return c + window >= t && c <= t + window; }); };
+    size_t column = best * kChunk;
+    while (masked(column) || normalized(column, nullptr, min_terms) != minimum[best])
+      ++column;
+    taken.push_back(column);
+    // The chunks its window covers lose those columns.
+    const size_t from = column > window ? column - window : 0;
+    const size_t to = std::min(columns() - 1, column + window);
+    for (size_t k = from / kChunk; k <= to / kChunk; ++k)
+      minimum[k] = chunkMinimum(k, min_terms, taken, window, nullptr);
+  }
+  return finite;
 }
 
 }  // namespace openable

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <map>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/objdetect.hpp>
 
 #include "openable/descriptor_implementations.h"
 #include "openable/error.h"
@@ -432,6 +433,48 @@ TEST_P(EveryDescriptor, DescribesIlluminationInvariantPatches)
   const Described da = describe(*extractor, a);
   EXPECT_EQ(da.distance(describe(*extractor, a)), 0.0);
   EXPECT_GT(da.distance(describe(*extractor, b)), 0.05) << GetParam();
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// HOG computes its block histograms itself, from OpenCV's gradients: every value must be the float OpenCV's
+// HOGDescriptor::compute gives (same weights, same order of additions), or maps saved before would drift. Every
+// patch size of the shipped and tested configurations, real patches of every traversal and noise.
+TEST(Hog, EqualsOpenCvsHogDescriptorBitForBit)
+{
+  cv::RNG rng(3);
+  for (int patch_size : {16, 32, 64, 80, 128, 130})
+  {
+    const HogExtractor hog(patch_size);
+    const int window = patch_size / 4 * 4, cell = window / 4;
+    const cv::HOGDescriptor reference(cv::Size(window, window), cv::Size(2 * cell, 2 * cell), cv::Size(cell, cell),
+                                      cv::Size(cell, cell), 9);
+    // 8-bit images spanning 0 .. 255, so that the extractor's own stretch to 8 bits gives them back.
+    std::vector<cv::Mat> images;
+    for (const auto& [traversal, frame] : std::vector<std::pair<std::string, int>>{
+             {"day_left", 10}, {"day_right", 77}, {"night_right", 0}, {"night_right", 150}})
+    {
+      images.emplace_back();
+      cv::normalize(patchOf(gardensPoint(traversal, frame), patch_size).intensity, images.back(), 0, 255,
+                    cv::NORM_MINMAX, CV_8U);
+    }
+    images.emplace_back(patch_size, patch_size, CV_8U);
+    rng.fill(images.back(), cv::RNG::UNIFORM, 0, 256);
+    images.back().at<uint8_t>(0, 0) = 0, images.back().at<uint8_t>(0, 1) = 255;
+    for (const cv::Mat& image : images)
+    {
+      Patch patch;
+      image.convertTo(patch.intensity, CV_32F);
+      std::vector<float> values(324), expected;
+      hog.describeFloat(patch, values.data());
+      cv::Mat window_image = image;
+      if (window != patch_size)
+        cv::resize(image, window_image, cv::Size(window, window), 0, 0, cv::INTER_AREA);
+      reference.compute(window_image, expected);
+      ASSERT_EQ(expected.size(), values.size());
+      for (size_t i = 0; i < values.size(); ++i)
+        ASSERT_EQ(values[i], expected[i]) << "patch " << patch_size << ", value " << i;  // exact, not near
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -73,6 +73,41 @@ TEST(Hamming, RowKernelsEqualPairwiseDistancesOnPackedSmallRows)
     }
 }
 
+// The fused difference of two rows (the sequence recurrence's entering minus leaving term): packed rows of up
+// to 9 words (the AVX-512 fused path and its fallback) and strided ones, every count around multiples of 8.
+TEST(Hamming, RowDifferenceEqualsDifferenceOfNaiveDistances)
+{
+  std::mt19937_64 rng(17);
+  for (size_t words : {1u, 2u, 5u, 6u, 8u, 9u, 22u})
+    for (size_t stride : {words, words + 3})
+      for (size_t count : {0u, 1u, 7u, 8u, 9u, 37u, 300u})
+      {
+        const auto qa = randomWords(rng, words);
+        const auto qb = randomWords(rng, words);
+        auto rows_a = randomWords(rng, stride * count + 1);
+        auto rows_b = randomWords(rng, stride * count + 1);
+        // The extremes, +64 and -64 in every word (the bias of the fused sum), and equal rows.
+        for (size_t r = 0; r < count && (count == 8 || count == 9); ++r)
+          for (size_t i = 0; i < words; ++i)
+          {
+            rows_a[r * stride + i] = count == 9 ? ~qa[i] : qa[i];
+            rows_b[r * stride + i] = count == 9 ? qb[i] : ~qb[i];
+          }
+        if (count == 37)
+          rows_b = rows_a;
+        for (HammingKernel k : supportedKernels())
+        {
+          std::vector<int32_t> out(count + 1, 12345);
+          hammingRowDifference(k, qa.data(), rows_a.data(), qb.data(), rows_b.data(), stride, words, count, out.data());
+          for (size_t i = 0; i < count; ++i)
+            ASSERT_EQ(out[i], int32_t(naiveBitCount(qa.data(), rows_a.data() + i * stride, words)) -
+                                  int32_t(naiveBitCount(qb.data(), rows_b.data() + i * stride, words)))
+                << kernelName(k) << " words=" << words << " stride=" << stride << " count=" << count << " row " << i;
+          EXPECT_EQ(out[count], 12345) << kernelName(k) << ": wrote past the row";
+        }
+      }
+}
+
 TEST(Hamming, BestKernelIsTheLastSupportedAndPortableAlwaysExists)
 {
   const auto kernels = supportedKernels();

@@ -231,6 +231,36 @@ TEST(AreaDownsample, DecimateIsTheRoundedBlockMeanForEveryChannelCountAndBlockSh
   EXPECT_EQ(cv::norm(decimate(cv::Mat(600, 10, CV_8UC1, cv::Scalar(255)), 1, 300), cv::NORM_INF), 255.0);
 }
 
+// The preprocessor converts to grey inside the decimation: it must give the pixels of the two steps it
+// replaced, cvtColor(decimate()), for BGR and BGRA and every block shape (the descriptors stay bit-identical).
+TEST(AreaDownsample, DecimateGreyIsCvtColorOfDecimate)
+{
+  cv::RNG rng(11);
+  for (int channels : {1, 3, 4})
+    for (const auto& [kx, ky] : std::vector<std::pair<int, int>>{{1, 1}, {2, 1}, {5, 3}, {10, 7}, {3, 300}})
+    {
+      cv::Mat image(601, 643, CV_8UC(channels));
+      rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+      cv::Mat expected = decimate(image, kx, ky);
+      if (channels > 1)
+        cv::cvtColor(expected, expected, channels == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+      const cv::Mat grey = decimateGrey(image, kx, ky);
+      ASSERT_EQ(grey.type(), CV_8UC1);
+      EXPECT_EQ(cv::norm(grey, expected, cv::NORM_INF), 0.0) << channels << " channels, " << kx << "x" << ky;
+    }
+  // Every colour once: the fixed-point weights are OpenCV's.
+  cv::Mat colours(4096, 4096, CV_8UC3);
+  for (int i = 0; i < (1 << 24); ++i)
+  {
+    uint8_t* p = colours.ptr<uint8_t>(0) + 3 * i;
+    p[0] = uint8_t(i), p[1] = uint8_t(i >> 8), p[2] = uint8_t(i >> 16);
+  }
+  cv::Mat expected;
+  cv::cvtColor(colours, expected, cv::COLOR_BGR2GRAY);
+  EXPECT_EQ(cv::norm(decimateGrey(colours, 1, 1), expected, cv::NORM_INF), 0.0);
+  EXPECT_THROW(decimateGrey(cv::Mat(10, 10, CV_8UC2), 2, 2), Error);
+}
+
 TEST(AreaDownsample, ExactIntegerFactorsGiveOpenCvsAreaResize)
 {
   // 640x480 -> 128x160 is 5x3 blocks: OpenCV's area interpolation is the same block mean.

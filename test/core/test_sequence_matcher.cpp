@@ -1,6 +1,7 @@
 // SequenceMatcher against a brute-force O(N * L) reference on random descriptors.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 
 #include "openable/error.h"
@@ -203,6 +204,94 @@ TEST(SequenceMatcher, BoundedHistoryKeepsFullSequencesExact)
   }
   EXPECT_GT(evictions, 50u);
   EXPECT_GE(db.size(), 30u);  // 15/16 of the capacity at least
+}
+
+// Hundreds of columns: the in-place update crosses chunk boundaries (256 columns), and the candidate range
+// shrinks and grows from frame to frame, so chains start, stop and restart inside and across chunks.
+TEST(SequenceMatcher, ManyColumnsWithChangingCandidatesEqualBruteForce)
+{
+  std::mt19937_64 rng(23);
+  for (int L : {1, 2, 20})
+    for (bool bidirectional : {false, true})
+    {
+      const auto layout = binaryLayout(6);  // HOG-B's 6 words: the fused AVX-512 kernel
+      const FrameMetric metric(layout);
+      PlaceDatabase map(layout);
+      std::vector<size_t> candidates_of;  // by query
+      BruteForce bf{metric, {}, {}, [&candidates_of](long q, long r) { return size_t(r) < candidates_of[q]; }};
+      for (int i = 0; i < 700; ++i)
+      {
+        // Few distinct descriptors: many equal sums.
+        bf.reference.push_back(i % 5 == 0 && i > 0 ? bf.reference[i / 2] : openable_test::randomWords(rng, 6));
+        map.add(bf.reference.back());
+      }
+      SequenceMatcher m(layout, L, bidirectional);
+      for (long t = 0; t < 45; ++t)
+      {
+        // Mostly everything, sometimes a few columns fewer or far fewer (across a chunk boundary).
+        const size_t roll = rng() % 8;
+        candidates_of.push_back(roll == 0 ? 700 - rng() % 3 : roll == 1 ? 200 + rng() % 120 : 700);
+        bf.queries.push_back(t % 4 == 0 ? bf.reference[(t * 37) % 700] : openable_test::randomWords(rng, 6));
+        m.match(bf.queries.back().data(), map, candidates_of.back());
+        ASSERT_EQ(m.columns(), candidates_of.back());
+        expectRowMatches(m, bf, t, L, bidirectional, 0);
+      }
+    }
+}
+
+// smallestDistinct() against the selection it replaces: normalizedRow(), then repeatedly the first smallest
+// finite value with the windows of those taken blanked out.
+TEST(SequenceMatcher, SmallestDistinctEqualsScanningTheRow)
+{
+  std::mt19937_64 rng(29);
+  const auto naive =
+      [](const SequenceMatcher& m, size_t count, size_t window, int min_terms, std::vector<size_t>& taken)
+  {
+    std::vector<float> row;
+    m.normalizedRow(row, nullptr, min_terms);
+    taken.clear();
+    size_t finite = 0;
+    for (float d : row)
+      finite += std::isfinite(d);
+    while (taken.size() < count)
+    {
+      size_t best = row.size();
+      for (size_t c = 0; c < row.size(); ++c)
+        if (std::isfinite(row[c]) && (best == row.size() || row[c] < row[best]))
+          best = c;
+      if (best == row.size())
+        break;
+      taken.push_back(best);
+      for (size_t c = best > window ? best - window : 0; c <= best + window && c < row.size(); ++c)
+        row[c] = std::nanf("");
+    }
+    return finite;
+  };
+  for (int L : {1, 3, 10})
+    for (bool bidirectional : {false, true})
+    {
+      const auto layout = binaryLayout(1);
+      PlaceDatabase db(layout);
+      SequenceMatcher m(layout, L, bidirectional);
+      for (long t = 0; t < 900; ++t)
+      {
+        // Descriptors of a few bits: ties everywhere, and stretches of exact repeats (distance 0).
+        const uint64_t d = (t > 500 && t % 50 < 20) ? *db.descriptor(size_t(t - 400)) : rng() & 0x1F;
+        const size_t exclusion = 30;
+        m.match(&d, db, db.size() > exclusion ? db.size() - exclusion : 0);
+        if (t % 7 == 0 || t > 880)
+          for (size_t count : {1u, 5u})
+            for (size_t window : {0u, 10u, 300u})
+              for (int min_terms : {1, L})
+              {
+                std::vector<size_t> expected, got;
+                const size_t expected_finite = naive(m, count, window, min_terms, expected);
+                ASSERT_EQ(m.smallestDistinct(count, window, min_terms, got), expected_finite) << "t=" << t;
+                ASSERT_EQ(got, expected) << "t=" << t << " L=" << L << " window=" << window;
+              }
+        db.add(&d, 1);
+      }
+    }
 }
 
 TEST(SequenceMatcher, NormalizedDistanceIsMeanTermOverMaximum)

@@ -1,12 +1,15 @@
 // Issue 12: a map of several sessions, continued as a new session, merged, saved and loaded.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "openable/error.h"
 #include "openable/frame_describer.h"
 #include "openable/loop_detector.h"
+#include "openable/map_matcher.h"
 #include "openable/session_map.h"
 #include "test_util.h"
 
@@ -313,4 +316,61 @@ TEST(SessionMap, DescriptorHashFollowsOnlyTheDescriptorKeys)
   EXPECT_EQ(descriptorHash(live), descriptorHash(c));
   EXPECT_NE(descriptorHash(other), descriptorHash(c));
   EXPECT_EQ(descriptorHash(c), descriptorHash(Config::fromYamlString(c.toYaml())));
+}
+
+TEST(MapMatcher, CandidatesOfSeveralSessionsAreThoseOfOneScanOverAllRows)
+{
+  // Reference: the greedy scan over every session's row side by side (MapMatcher::lastRow), windows
+  // clipped to their session; MapMatcher picks per session and merges. Same places, same order.
+  Config c = ldbConfig();
+  c.top_k = 5;
+  c.uniqueness_window = 3;
+  c.exclusion_window = 4;
+  std::mt19937_64 rng(7);
+  const std::vector<FrameDescriptor> places = route(rng, 30);
+  SessionMap map(layoutOf(c), c.toYaml());
+  for (int s = 0; s < 3; ++s)
+  {
+    const uint32_t session = map.addSession({"s" + std::to_string(s), "", 0.0});
+    for (int i = 0; i < 25 + 5 * s; ++i)
+      map.add(session, revisit(places[static_cast<size_t>((i + 7 * s) % 30)], rng));
+  }
+  const uint32_t own = map.addSession({"own", "", 0.0});
+  MapMatcher matcher(c, map.layout(), false);
+  std::vector<float> row;
+  for (int t = 0; t < 40; ++t)
+  {
+    const FrameDescriptor query = revisit(places[static_cast<size_t>(t % 30)], rng);
+    const Detection d = matcher.match(query, map, static_cast<int>(own), 0.0);
+    matcher.lastRow(map, row);
+    std::vector<size_t> starts;
+    for (uint32_t s = 0, at = 0; s < map.sessionCount(); at += map.frames(s).size(), ++s)
+      starts.push_back(at);
+    starts.push_back(row.size());
+    std::vector<std::pair<uint32_t, size_t>> expected;  // (session, position)
+    size_t finite = 0;
+    for (float v : row)
+      finite += std::isfinite(v);
+    while (expected.size() < static_cast<size_t>(c.top_k))
+    {
+      size_t best = row.size();
+      for (size_t i = 0; i < row.size(); ++i)
+        if (std::isfinite(row[i]) && (best == row.size() || row[i] < row[best]))
+          best = i;
+      if (best == row.size())
+        break;
+      const auto s = static_cast<uint32_t>(std::upper_bound(starts.begin(), starts.end(), best) - starts.begin() - 1);
+      expected.emplace_back(s, best - starts[s]);
+      for (size_t i = std::max(starts[s], best >= 3 ? best - 3 : 0); i <= best + 3 && i < starts[s + 1]; ++i)
+        row[i] = std::nanf("");
+    }
+    EXPECT_EQ(d.candidates, finite) << t;
+    ASSERT_EQ(d.top.size(), expected.size()) << t;
+    for (size_t k = 0; k < expected.size(); ++k)
+    {
+      EXPECT_EQ(d.top[k].session, expected[k].first) << t << " #" << k;
+      EXPECT_EQ(d.top[k].position, expected[k].second) << t << " #" << k;
+    }
+    map.add(own, query);
+  }
 }

@@ -19,7 +19,20 @@ void checkIntensityPatch(const std::string& descriptor, const cv::Mat& intensity
     throw Error(descriptor + " was built for patch_size " + std::to_string(patch_size) + " and got a " +
                 std::to_string(intensity.cols) + "x" + std::to_string(intensity.rows) + " patch; expected " +
                 std::to_string(patch_size) + "x" + std::to_string(patch_size));
-  if (!cv::checkRange(intensity))
+  // NaN or infinity: every exponent bit set. Checked on the bits so that the loop vectorises (cv::checkRange
+  // took ~10 us a patch, a tenth of describing it).
+  uint32_t all_ones = 0;
+  for (int y = 0; y < intensity.rows; ++y)
+  {
+    const float* row = intensity.ptr<float>(y);
+    for (int x = 0; x < intensity.cols; ++x)
+    {
+      uint32_t bits;
+      std::memcpy(&bits, row + x, sizeof(bits));
+      all_ones |= uint32_t((bits & 0x7f800000u) == 0x7f800000u);
+    }
+  }
+  if (all_ones)
     throw Error(descriptor + " got a patch with NaN or infinite values; expected finite intensities");
 }
 
@@ -37,7 +50,7 @@ cv::Mat toEightBit(const cv::Mat& intensity)
     const float* in = intensity.ptr<float>(y);
     uint8_t* o = out.ptr<uint8_t>(y);
     for (int x = 0; x < intensity.cols; ++x)
-      o[x] = static_cast<uint8_t>(std::floor((double(in[x]) - low) * scale + 0.5));
+      o[x] = static_cast<uint8_t>(int((double(in[x]) - low) * scale + 0.5));  // >= 0.5: truncation is floor
   }
   return out;
 }
