@@ -38,7 +38,18 @@ struct UsageError : std::runtime_error
   using std::runtime_error::runtime_error;
 };
 
-std::string formatStamp(double stamp)
+/// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or a line break.
+std::string csvField(const std::string& text)
+{
+  if (text.find_first_of(",\"\n") == std::string::npos)
+    return text;
+  std::string quoted = "\"";
+  for (char c : text)
+    quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+std::string sixDecimals(double stamp)
 {
   std::ostringstream out;
   out << std::fixed << std::setprecision(6) << stamp;
@@ -62,7 +73,7 @@ int info(const std::string& path)
               << frames.size() << " frames";
     if (!frames.empty())
       std::cout << ", ids " << frames.firstId() << ".." << frames.firstId() + frames.size() - 1;
-    std::cout << ", start stamp " << formatStamp(map.session(s).start_stamp) << "\n";
+    std::cout << ", start stamp " << sixDecimals(map.session(s).start_stamp) << "\n";
   }
   std::cout << "configuration:\n" << map.configYaml();
   if (!map.configYaml().empty() && map.configYaml().back() != '\n')
@@ -89,15 +100,16 @@ int exportCsv(const std::string& path, const std::string& dir)
   openable::StagedOutput output(dir);
 
   std::ostringstream frames;
-  frames << "session,session_name,id,stamp,source,has_pose,x,y,z,qx,qy,qz,qw\n" << std::setprecision(17);
+  frames << "session,session_name,id,stamp,source,has_pose,x,y,z,qx,qy,qz,qw\n";
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
     for (size_t p = 0; p < map.frames(s).size(); ++p)
     {
       const openable::FrameInfo f = map.frames(s).info(p);
-      frames << s << "," << map.session(s).name << "," << f.id << "," << formatStamp(f.stamp) << "," << f.source
+      frames << s << "," << csvField(map.session(s).name) << "," << f.id << "," << sixDecimals(f.stamp) << ","
+             << csvField(f.source)
              << "," << (f.has_pose ? 1 : 0);
       for (double v : f.pose)
-        frames << "," << (f.has_pose ? std::to_string(v) : "");
+        frames << "," << (f.has_pose ? sixDecimals(v) : "");  // micrometres, and quaternions to 1e-6
       frames << "\n";
     }
   const std::vector<openable::MapLoop> loops = openable::replayLoops(map, config);
