@@ -37,16 +37,24 @@ inline uint8_t grey(uint32_t b, uint32_t g, uint32_t r)
   return static_cast<uint8_t>((b * 3735 + g * 19235 + r * 9798 + (1 << 14)) >> 15);
 }
 
-/// columns[i] += a[i] + b[i] (b may be null) and blocks[i] = sum over dx < kx of columns[i + dx * step], for
-/// i < n, in groups of kLanes positions (the arrays are padded). Compiled twice, for AVX2 and for any x86-64
-/// (the package builds without -march), and chosen when the library loads: twice the lanes per instruction on
-/// the two loops that read every byte of the image.
+/// columns[i] += a[i] + b[i] (b may be null; = instead of += for a band's first rows) and blocks[i] = sum over
+/// dx < kx of columns[i + dx * step], for i < n, in groups of kLanes positions (the arrays are padded). Compiled
+/// twice, for AVX2 and for any x86-64 (the package builds without -march), and chosen when the library loads:
+/// twice the lanes per instruction on the two loops that read every byte of the image.
 constexpr int kLanes = 32;
 
 template <typename Sum>
-inline void addRows(Sum* __restrict columns, const uint8_t* __restrict a, const uint8_t* __restrict b, int n)
+inline void addRows(Sum* __restrict columns, const uint8_t* __restrict a, const uint8_t* __restrict b, int n,
+                    bool first)
 {
-  if (b)
+  // A band's first rows set the sums: no clearing pass over them before (a memset per band).
+  if (first && b)
+    for (int i = 0; i < n; ++i)
+      columns[i] = static_cast<Sum>(a[i] + b[i]);
+  else if (first)
+    for (int i = 0; i < n; ++i)
+      columns[i] = a[i];
+  else if (b)
     for (int i = 0; i < n; ++i)
       columns[i] = static_cast<Sum>(columns[i] + a[i] + b[i]);
   else
@@ -80,13 +88,13 @@ inline void windowSums(const Sum* __restrict columns, int n, int kx, int step, S
 #else
 #define OPENABLE_CLONES
 #endif
-OPENABLE_CLONES void addRows16(uint16_t* columns, const uint8_t* a, const uint8_t* b, int n)
+OPENABLE_CLONES void addRows16(uint16_t* columns, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows(columns, a, b, n);
+  addRows(columns, a, b, n, first);
 }
-OPENABLE_CLONES void addRows32(uint32_t* columns, const uint8_t* a, const uint8_t* b, int n)
+OPENABLE_CLONES void addRows32(uint32_t* columns, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows(columns, a, b, n);
+  addRows(columns, a, b, n, first);
 }
 OPENABLE_CLONES void windowSums16(const uint16_t* columns, int n, int kx, int step, uint16_t* blocks)
 {
@@ -96,13 +104,13 @@ OPENABLE_CLONES void windowSums32(const uint32_t* columns, int n, int kx, int st
 {
   windowSums(columns, n, kx, step, blocks);
 }
-inline void addRowsTo(uint16_t* c, const uint8_t* a, const uint8_t* b, int n)
+inline void addRowsTo(uint16_t* c, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows16(c, a, b, n);
+  addRows16(c, a, b, n, first);
 }
-inline void addRowsTo(uint32_t* c, const uint8_t* a, const uint8_t* b, int n)
+inline void addRowsTo(uint32_t* c, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows32(c, a, b, n);
+  addRows32(c, a, b, n, first);
 }
 inline void windowSumsOf(const uint16_t* c, int n, int kx, int step, uint16_t* out)
 {
@@ -132,12 +140,11 @@ void blockSums(const cv::Mat& image, int kx, int ky, cv::Size out, Emit emit)
   for (int oy = 0; oy < out.height; ++oy)
   {
     const auto row = [&](int dy) { return image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels; };
-    std::fill(columns, columns + row_values, Sum(0));
     int dy = 0;
     for (; dy + 1 < ky; dy += 2)
-      addRowsTo(columns, row(dy), row(dy + 1), row_values);
+      addRowsTo(columns, row(dy), row(dy + 1), row_values, dy == 0);
     if (dy < ky)
-      addRowsTo(columns, row(dy), nullptr, row_values);
+      addRowsTo(columns, row(dy), nullptr, row_values, dy == 0);
     windowSumsOf(columns, window_values, kx, channels, blocks);
     emit(oy, static_cast<const Sum*>(blocks));
   }
