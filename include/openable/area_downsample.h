@@ -34,4 +34,10 @@ cv::Mat decimateTowards(const cv::Mat& image, cv::Size target);
 /// decimateTowards(), converted to grey as decimateGrey() does (cvtColor when the factors are 1).
 cv::Mat decimateGreyTowards(const cv::Mat& image, cv::Size target);
 
+/// cv::resize(image, out, target, 0, 0, cv::INTER_AREA), the same floats bit for bit, for the small area step
+/// of a one-channel float image (step 2 above): OpenCV's weight tables and order of additions, without its
+/// per-row walk of the column table when the width does not change. Other types, enlargements and
+/// whole-number ratios go to cv::resize itself.
+cv::Mat areaResize(const cv::Mat& image, cv::Size target);
+
 }  // namespace openable

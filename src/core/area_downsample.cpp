@@ -1,6 +1,8 @@
 #include "openable/area_downsample.h"
 
 #include <algorithm>
+#include <cfloat>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <opencv2/imgproc.hpp>
@@ -35,16 +37,24 @@ inline uint8_t grey(uint32_t b, uint32_t g, uint32_t r)
   return static_cast<uint8_t>((b * 3735 + g * 19235 + r * 9798 + (1 << 14)) >> 15);
 }
 
-/// columns[i] += a[i] + b[i] (b may be null) and blocks[i] = sum over dx < kx of columns[i + dx * step], for
-/// i < n, in groups of kLanes positions (the arrays are padded). Compiled twice, for AVX2 and for any x86-64
-/// (the package builds without -march), and chosen when the library loads: twice the lanes per instruction on
-/// the two loops that read every byte of the image.
+/// columns[i] += a[i] + b[i] (b may be null; = instead of += for a band's first rows) and blocks[i] = sum over
+/// dx < kx of columns[i + dx * step], for i < n, in groups of kLanes positions (the arrays are padded). Compiled
+/// twice, for AVX2 and for any x86-64 (the package builds without -march), and chosen when the library loads:
+/// twice the lanes per instruction on the two loops that read every byte of the image.
 constexpr int kLanes = 32;
 
 template <typename Sum>
-inline void addRows(Sum* __restrict columns, const uint8_t* __restrict a, const uint8_t* __restrict b, int n)
+inline void addRows(Sum* __restrict columns, const uint8_t* __restrict a, const uint8_t* __restrict b, int n,
+                    bool first)
 {
-  if (b)
+  // A band's first rows set the sums: no clearing pass over them before (a memset per band).
+  if (first && b)
+    for (int i = 0; i < n; ++i)
+      columns[i] = static_cast<Sum>(a[i] + b[i]);
+  else if (first)
+    for (int i = 0; i < n; ++i)
+      columns[i] = a[i];
+  else if (b)
     for (int i = 0; i < n; ++i)
       columns[i] = static_cast<Sum>(columns[i] + a[i] + b[i]);
   else
@@ -78,13 +88,13 @@ inline void windowSums(const Sum* __restrict columns, int n, int kx, int step, S
 #else
 #define OPENABLE_CLONES
 #endif
-OPENABLE_CLONES void addRows16(uint16_t* columns, const uint8_t* a, const uint8_t* b, int n)
+OPENABLE_CLONES void addRows16(uint16_t* columns, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows(columns, a, b, n);
+  addRows(columns, a, b, n, first);
 }
-OPENABLE_CLONES void addRows32(uint32_t* columns, const uint8_t* a, const uint8_t* b, int n)
+OPENABLE_CLONES void addRows32(uint32_t* columns, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows(columns, a, b, n);
+  addRows(columns, a, b, n, first);
 }
 OPENABLE_CLONES void windowSums16(const uint16_t* columns, int n, int kx, int step, uint16_t* blocks)
 {
@@ -94,13 +104,13 @@ OPENABLE_CLONES void windowSums32(const uint32_t* columns, int n, int kx, int st
 {
   windowSums(columns, n, kx, step, blocks);
 }
-inline void addRowsTo(uint16_t* c, const uint8_t* a, const uint8_t* b, int n)
+inline void addRowsTo(uint16_t* c, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows16(c, a, b, n);
+  addRows16(c, a, b, n, first);
 }
-inline void addRowsTo(uint32_t* c, const uint8_t* a, const uint8_t* b, int n)
+inline void addRowsTo(uint32_t* c, const uint8_t* a, const uint8_t* b, int n, bool first)
 {
-  addRows32(c, a, b, n);
+  addRows32(c, a, b, n, first);
 }
 inline void windowSumsOf(const uint16_t* c, int n, int kx, int step, uint16_t* out)
 {
@@ -130,12 +140,11 @@ void blockSums(const cv::Mat& image, int kx, int ky, cv::Size out, Emit emit)
   for (int oy = 0; oy < out.height; ++oy)
   {
     const auto row = [&](int dy) { return image.ptr<uint8_t>(y0 + oy * ky + dy) + x0 * channels; };
-    std::fill(columns, columns + row_values, Sum(0));
     int dy = 0;
     for (; dy + 1 < ky; dy += 2)
-      addRowsTo(columns, row(dy), row(dy + 1), row_values);
+      addRowsTo(columns, row(dy), row(dy + 1), row_values, dy == 0);
     if (dy < ky)
-      addRowsTo(columns, row(dy), nullptr, row_values);
+      addRowsTo(columns, row(dy), nullptr, row_values, dy == 0);
     windowSumsOf(columns, window_values, kx, channels, blocks);
     emit(oy, static_cast<const Sum*>(blocks));
   }
@@ -191,6 +200,36 @@ cv::Size factorsTowards(const cv::Mat& image, cv::Size target)
     throw Error("area downsampling needs a positive target size");
   return cv::Size(std::max(1, image.cols / target.width), std::max(1, image.rows / target.height));
 }
+
+/// One source pixel's share of one target pixel along an axis.
+struct AreaWeight
+{
+  int source;
+  int target;
+  float weight;
+};
+
+/// OpenCV's area weights along one axis (computeResizeAreaTab in its resize.cpp): for each target pixel, in
+/// source order, the partial pixel before its cell, the whole ones, the partial one after; the overlap over the
+/// cell width in double, rounded to float. The same table gives the same floats.
+std::vector<AreaWeight> areaWeights(int source, int target, double scale)
+{
+  std::vector<AreaWeight> out;
+  for (int t = 0; t < target; ++t)
+  {
+    const double begin = t * scale, end = begin + scale;
+    const double width = std::min(scale, source - begin);
+    const int last = std::min(cvFloor(end), source - 1);
+    const int first = std::min(cvCeil(begin), last);
+    if (first - begin > 1e-3)
+      out.push_back({first - 1, t, float((first - begin) / width)});
+    for (int s = first; s < last; ++s)
+      out.push_back({s, t, float(1.0 / width)});
+    if (end - last > 1e-3)
+      out.push_back({last, t, float(std::min(std::min(end - last, 1.), width) / width)});
+  }
+  return out;
+}
 }  // namespace
 
 cv::Mat decimate(const cv::Mat& image, int kx, int ky)
@@ -234,6 +273,56 @@ cv::Mat decimateGreyTowards(const cv::Mat& image, cv::Size target)
     return image;
   cv::Mat out;
   cv::cvtColor(image, out, image.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+  return out;
+}
+
+cv::Mat areaResize(const cv::Mat& image, cv::Size target)
+{
+  // OpenCV's choice of path (cv::resize, INTER_AREA): a true area resize when shrinking, its integer-ratio
+  // fast path when both ratios are whole numbers.
+  const double scale_x = 1. / (double(target.width) / image.cols), scale_y = 1. / (double(target.height) / image.rows);
+  const bool integer_ratios = std::abs(scale_x - cv::saturate_cast<int>(scale_x)) < DBL_EPSILON &&
+                              std::abs(scale_y - cv::saturate_cast<int>(scale_y)) < DBL_EPSILON;
+  if (image.type() != CV_32FC1 || target.width <= 0 || target.height <= 0 || scale_x < 1 || scale_y < 1 ||
+      integer_ratios)
+  {
+    cv::Mat out;
+    cv::resize(image, out, target, 0, 0, cv::INTER_AREA);
+    return out;
+  }
+  const std::vector<AreaWeight> columns = areaWeights(image.cols, target.width, scale_x);
+  const std::vector<AreaWeight> rows = areaWeights(image.rows, target.height, scale_y);
+  // Same width: every column weight is 1 and a source row is its own horizontal sum, a loop that vectorises.
+  const bool same_width = image.cols == target.width;
+  cv::Mat out(target, CV_32FC1);
+  std::vector<float> row(target.width), sum(target.width, 0.f);
+  int current = 0;
+  // As OpenCV: each source row's horizontal sums, then added into its target row's sums, terms in table order;
+  // each product rounded before its sum (no FMA: a baseline x86-64 build, as OpenCV's own).
+  for (const AreaWeight& r : rows)
+  {
+    const float* s = image.ptr<float>(r.source);
+    if (same_width)
+      for (int x = 0; x < target.width; ++x)
+        row[x] = 0.f + s[x];  // OpenCV's sums start at +0: -0 becomes +0
+    else
+    {
+      std::fill(row.begin(), row.end(), 0.f);
+      for (const AreaWeight& c : columns)
+        row[c.target] += s[c.source] * c.weight;
+    }
+    if (r.target != current)
+    {
+      std::copy(sum.begin(), sum.end(), out.ptr<float>(current));
+      for (int x = 0; x < target.width; ++x)
+        sum[x] = r.weight * row[x];
+      current = r.target;
+    }
+    else
+      for (int x = 0; x < target.width; ++x)
+        sum[x] += r.weight * row[x];
+  }
+  std::copy(sum.begin(), sum.end(), out.ptr<float>(current));
   return out;
 }
 

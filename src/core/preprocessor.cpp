@@ -127,7 +127,7 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
                       ? illuminationInvariant(decimateTowards(image, target), config_.alpha)
                       : toOneChannel(decimateGreyTowards(image, target), false, config_.alpha);
   if (small.size() != target)
-    cv::resize(small, small, target, 0, 0, cv::INTER_AREA);
+    small = areaResize(small, target);
   return split(normalizeBlocks(small, config_.patch_normalization), cv::Mat(), across);
 }
 

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <utility>
 #include <vector>
@@ -278,6 +280,94 @@ TEST(AreaDownsample, ExactIntegerFactorsGiveOpenCvsAreaResize)
   cv::Mat difference;
   cv::absdiff(two_step, one_step, difference);
   EXPECT_LT(cv::mean(difference)[0], 2.0);
+}
+
+namespace
+{
+/// Every float of a and b the same, bit for bit (-0 and +0 differ, as do NaNs with other payloads).
+bool sameBits(const cv::Mat& a, const cv::Mat& b)
+{
+  if (a.size() != b.size() || a.type() != b.type())
+    return false;
+  for (int y = 0; y < a.rows; ++y)
+    if (std::memcmp(a.ptr(y), b.ptr(y), a.cols * a.elemSize()) != 0)
+      return false;
+  return true;
+}
+
+cv::Mat openCvAreaResize(const cv::Mat& image, cv::Size target)
+{
+  cv::Mat out;
+  cv::resize(image, out, target, 0, 0, cv::INTER_AREA);
+  return out;
+}
+}  // namespace
+
+// The preprocessor's small area step is areaResize instead of cv::resize: the descriptors stay bit-identical only
+// if every float is OpenCV's. Real frames as the preprocessor sees them (decimated, grey or Eq. 6), for every
+// patch size whose ratio is not a whole number, and the 640x480 frame of the benchmarks.
+TEST(AreaDownsample, AreaResizeIsOpenCvsBitForBit)
+{
+  const std::string nordland = openable_test::sharedData("nordland/");
+  std::vector<cv::Mat> frames = {
+      openable_test::gardensPoint("day_right", 100), openable_test::gardensPoint("night_right", 100),
+      openable_test::gardensPoint("day_left", 7), cv::imread(nordland + "summer/images-00010.png", cv::IMREAD_COLOR),
+      cv::imread(nordland + "winter/images-01000.png", cv::IMREAD_COLOR)};
+  for (const cv::Mat& frame : frames)
+    ASSERT_FALSE(frame.empty());
+  cv::Mat vga;
+  cv::resize(frames[0], vga, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+  frames.push_back(vga);
+  const size_t colour_frames = frames.size();
+  for (size_t i = 0; i < colour_frames; ++i)
+  {
+    cv::Mat grey;
+    cv::cvtColor(frames[i], grey, cv::COLOR_BGR2GRAY);
+    frames.push_back(grey);
+  }
+  int non_integer = 0;
+  for (const cv::Mat& frame : frames)
+    for (int p : {128, 100, 64, 48, 32, 24, 20, 16})
+    {
+      const cv::Size target(p, p);
+      cv::Mat grey;
+      decimateGreyTowards(frame, target).convertTo(grey, CV_32F);
+      std::vector<cv::Mat> inputs = {grey};
+      if (frame.channels() == 3)  // Eq. 6: negative values too
+        inputs.push_back(illuminationInvariant(decimateTowards(frame, target), 0.47));
+      for (const cv::Mat& small : inputs)
+      {
+        if (small.cols < p || small.rows < p)
+          continue;  // enlargements are cv::resize's own
+        non_integer += small.cols % p != 0 || small.rows % p != 0;
+        EXPECT_TRUE(sameBits(areaResize(small, target), openCvAreaResize(small, target)))
+            << frame.cols << "x" << frame.rows << "x" << frame.channels() << " -> " << small.cols << "x" << small.rows
+            << " -> " << p;
+      }
+    }
+  EXPECT_GT(non_integer, 40);  // the tables were exercised, not only cv::resize's own paths
+  // Noise of both signs with -0 among it, odd sizes and ratios, and sizes areaResize hands to cv::resize.
+  cv::RNG rng(5);
+  for (const auto& [from, to] : std::vector<std::pair<cv::Size, cv::Size>>{{{137, 135}, {128, 128}},
+                                                                           {{128, 160}, {128, 128}},
+                                                                           {{31, 97}, {7, 13}},
+                                                                           {{100, 100}, {99, 1}},
+                                                                           {{64, 32}, {32, 32}},
+                                                                           {{40, 40}, {20, 20}},
+                                                                           {{20, 20}, {40, 30}}})
+  {
+    cv::Mat noise(from, CV_32FC1);
+    rng.fill(noise, cv::RNG::UNIFORM, -1000.0, 1000.0);
+    noise.at<float>(0, 0) = -0.f;
+    noise.at<float>(from.height - 1, from.width - 1) = -0.f;
+    EXPECT_TRUE(sameBits(areaResize(noise, to), openCvAreaResize(noise, to))) << from << " -> " << to;
+  }
+  // The check itself sees one float off by one unit in the last place.
+  cv::Mat small;
+  decimateGreyTowards(vga, cv::Size(128, 128)).convertTo(small, CV_32F);
+  cv::Mat changed = areaResize(small, cv::Size(128, 128));
+  changed.at<int32_t>(64, 64) ^= 1;
+  EXPECT_FALSE(sameBits(changed, openCvAreaResize(small, cv::Size(128, 128))));
 }
 
 TEST(AreaDownsample, BadInputIsAClearError)
