@@ -24,7 +24,7 @@ struct FrameInput
   cv::Mat disparity;             ///< stereo: a disparity image instead of `right` (stereo_msgs: 32FC1, < 0 invalid)
   std::vector<cv::Mat> cameras;  ///< panoramic ring: one image per camera, in ring order (instead of `image`)
   double stamp = 0.0;            ///< seconds; 0 = unknown (no time checks, no exclusion_seconds)
-  uint32_t session = 0;
+  uint32_t session = 0;  ///< localising: the session reported for the query (stored frames take their map session)
   std::string source;  ///< file name or topic: stored with the frame, used in messages
   bool has_pose = false;
   std::array<double, 7> pose{{0, 0, 0, 0, 0, 0, 1}};  ///< x y z qx qy qz qw in a fixed frame
