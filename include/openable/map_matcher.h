@@ -79,7 +79,15 @@ private:
   FrameMetric metric_;
   std::vector<SequenceMatcher> matchers_;  ///< one per session of the map, in map order
   FrameDescriptor last_query_;
+  /// One session's candidate column and its distance.
+  struct Pick
+  {
+    float distance;
+    uint32_t session;
+    size_t column;
+  };
   std::vector<size_t> taken_;  ///< scratch: one session's best distinct columns
+  std::vector<Pick> picks_;    ///< scratch: every session's, then the best of them
 };
 
 }  // namespace openable

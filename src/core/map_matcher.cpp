@@ -80,13 +80,8 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   Detection detection;
   const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
   const size_t window = static_cast<size_t>(std::max(0, config_.uniqueness_window));
-  struct Pick
-  {
-    float distance;
-    uint32_t session;
-    size_t column;
-  };
-  std::vector<Pick> picks;
+  std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
+  picks.clear();
   bool own_excluded = false;
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
   {

@@ -25,8 +25,7 @@ double millisecondsSince(std::chrono::steady_clock::time_point start)
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-template <typename Map>
-Map nonEmpty(Map map)
+PlaceDatabase nonEmpty(PlaceDatabase map)
 {
   if (map.empty())
     throw Error("the reference map holds no frame; expected a map with at least one place");

@@ -11,6 +11,34 @@ namespace openable
 {
 namespace
 {
+/// One chain one frame on: the previous frame's chain (sum, count) of the column before (forward) or after
+/// (reverse) takes the entering term; a full chain of L terms drops its leaving term too, when that term
+/// still exists (`can_leave`), else it starts again (the frame leaving was evicted from a bounded history).
+inline void extendChain(uint32_t previous_sum, uint16_t previous_count, uint32_t entering, uint32_t leaving,
+                        bool can_leave, size_t L, uint32_t& sum, uint16_t& count)
+{
+  if (previous_count == 0)
+  {
+    sum = entering;
+    count = 1;
+  }
+  else if (previous_count < L)
+  {
+    sum = previous_sum + entering;
+    count = previous_count + 1;
+  }
+  else if (can_leave)
+  {
+    sum = previous_sum + entering - leaving;
+    count = static_cast<uint16_t>(L);
+  }
+  else
+  {
+    sum = entering;
+    count = 1;
+  }
+}
+
 /// Columns processed together: their descriptors (and those L frames earlier) stay in cache between the
 /// two distance computations of the recurrence, and each chunk gets one summary for smallestDistinct().
 constexpr size_t kChunk = 256;
@@ -224,27 +252,8 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
   for (size_t i = 0; i < n; ++i)
   {
     const size_t c = begin + i;
-    if (previous_count[i] == 0)
-    {
-      sum[c] = entering[i];
-      count[c] = 1;
-    }
-    else if (previous_count[i] < L)
-    {
-      sum[c] = previous_sum[i] + entering[i];
-      count[c] = previous_count[i] + 1;
-    }
-    else if (c >= L && can_drop)
-    {
-      sum[c] = previous_sum[i] + entering[i] - leaving_[i];
-      count[c] = static_cast<uint16_t>(L);
-    }
-    else
-    {
-      // The frame leaving the sequence was evicted from a bounded history: the chain starts again.
-      sum[c] = entering[i];
-      count[c] = 1;
-    }
+    extendChain(previous_sum[i], previous_count[i], entering[i], leaving_[i], c >= L && can_drop, L, sum[c],
+                count[c]);
   }
 }
 
@@ -291,26 +300,8 @@ void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t begi
   for (size_t i = 0; i < n; ++i)
   {
     const size_t c = begin + i;
-    if (previous_count[i] == 0)
-    {
-      sum[c] = entering[i];
-      count[c] = 1;
-    }
-    else if (previous_count[i] < L)
-    {
-      sum[c] = previous_sum[i] + entering[i];
-      count[c] = previous_count[i] + 1;
-    }
-    else if (c < drop_end && can_drop)
-    {
-      sum[c] = previous_sum[i] + entering[i] - leaving_[i];
-      count[c] = static_cast<uint16_t>(L);
-    }
-    else
-    {
-      sum[c] = entering[i];
-      count[c] = 1;
-    }
+    extendChain(previous_sum[i], previous_count[i], entering[i], leaving_[i], c < drop_end && can_drop, L, sum[c],
+                count[c]);
   }
 }
 

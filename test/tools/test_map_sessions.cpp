@@ -1,49 +1,30 @@
 // Issue 12, offline: a map saved, continued as a new session, merged, inspected and exported, on real
 // Gardens Point frames (day_right then night_right; the traversals are frame-aligned).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include "../core/test_util.h"
+#include "run_tool.h"
 
 namespace fs = std::filesystem;
 
 namespace
 {
-struct Result
-{
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-Result run(const std::string& binary, const std::string& arguments)
-{
-  const std::string command = binary + " " + arguments + " 2>&1";
-  Result r{-1, ""};
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe)
-    return r;
-  char buffer[512];
-  while (fgets(buffer, sizeof(buffer), pipe))
-    r.output += buffer;
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using openable_test::Result;
+using openable_test::runTool;
 
 Result offline(const std::string& arguments)
 {
-  return run(OPENABLE_OFFLINE_BINARY, "--config " + std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml " +
+  return runTool(OPENABLE_OFFLINE_BINARY, "--config " + std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml " +
                                           arguments + " --quiet");
 }
 
 Result mapTool(const std::string& arguments)
 {
-  return run(OPENABLE_MAP_BINARY, arguments);
+  return runTool(OPENABLE_MAP_BINARY, arguments);
 }
 
 std::string readFile(const std::string& path)

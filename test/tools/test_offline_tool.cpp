@@ -1,6 +1,5 @@
 // openable_offline end to end: the command line other tools and checks rely on.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -12,30 +11,17 @@
 
 #include "openable/npy.h"
 #include "../core/test_util.h"
+#include "run_tool.h"
 
 namespace fs = std::filesystem;
 
 namespace
 {
-struct Result
-{
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
+using openable_test::Result;
 
 Result run(const std::string& arguments)
 {
-  const std::string command = std::string(OPENABLE_OFFLINE_BINARY) + " " + arguments + " 2>&1";
-  Result r{-1, ""};
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe)
-    return r;
-  char buffer[512];
-  while (fgets(buffer, sizeof(buffer), pipe))
-    r.output += buffer;
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return openable_test::runTool(OPENABLE_OFFLINE_BINARY, arguments);
 }
 
 std::string config()
