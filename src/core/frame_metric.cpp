@@ -98,4 +98,21 @@ void FrameMetric::rowDifference(const uint64_t* qa, const uint64_t* rows_a, cons
     out[i] = int32_t(distance(qa, rows_a + i * stride)) - int32_t(distance(qb, rows_b + i * stride));
 }
 
+uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                                size_t count, uint32_t carry, uint32_t* sums) const
+{
+  const size_t stride = layout_.frameWords();
+  if (layout_.binary && layout_.blocks == 1)
+    return hammingChainStep(qa, rows_a, qb, rows_b, stride, stride, count, carry, sums);
+  uint32_t smallest = UINT32_MAX;
+  for (size_t i = 0; i < count; ++i)
+  {
+    const uint32_t old = sums[i];
+    sums[i] = carry + distance(qa, rows_a + i * stride) - distance(qb, rows_b + i * stride);
+    smallest = std::min(smallest, sums[i]);
+    carry = old;
+  }
+  return smallest;
+}
+
 }  // namespace openable

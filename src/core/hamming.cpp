@@ -2,6 +2,7 @@
 
 #include <immintrin.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "openable/error.h"
@@ -210,9 +211,49 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowD
     out[i] = int32_t(pairAvx512Inline(qa, rows_a + i * W, W)) - int32_t(pairAvx512Inline(qb, rows_b + i * W, W));
 }
 
+// One step of the sequence sums (hammingChainStep) on packed small rows: the eight differences of
+// rowDifferenceAvx512Packed are added to the old sums one column to the left, in place. Column i's old sum is
+// loaded before it is overwritten and the old sums of the eight columns before stay in a register, from which
+// valignd takes the one to the left: no copy of the sums and no array of differences in between.
+template <size_t W>
+__attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) uint32_t chainStepAvx512Packed(
+    const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b, size_t count,
+    uint32_t carry, uint32_t* sums)
+{
+  const PackedRows<W> a(qa), b(qb);
+  const __m512i bias = _mm512_set1_epi8(64);
+  const __m256i total_bias = _mm256_set1_epi32(64 * W);
+  __m256i old_before = _mm256_set1_epi32(static_cast<int>(carry));  // lane 7: the old sum left of column i
+  __m256i minimum = _mm256_set1_epi32(-1);
+  size_t i = 0;
+  for (; i + 8 <= count; i += 8)
+  {
+    const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(rows_a + i * W), bias), b.counts(rows_b + i * W));
+    const __m256i change = _mm256_sub_epi32(a.sums(bytes), total_bias);
+    const __m256i old = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(sums + i));
+    const __m256i updated = _mm256_add_epi32(_mm256_alignr_epi32(old, old_before, 7), change);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(sums + i), updated);
+    minimum = _mm256_min_epu32(minimum, updated);
+    old_before = old;
+  }
+  alignas(32) uint32_t lanes[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), minimum);
+  uint32_t smallest = *std::min_element(lanes, lanes + 8);
+  carry = static_cast<uint32_t>(_mm256_extract_epi32(old_before, 7));
+  for (; i < count; ++i)
+  {
+    const uint32_t old = sums[i];
+    sums[i] = carry + pairAvx512Inline(qa, rows_a + i * W, W) - pairAvx512Inline(qb, rows_b + i * W, W);
+    smallest = std::min(smallest, sums[i]);
+    carry = old;
+  }
+  return smallest;
+}
+
 bool hasVbmi()
 {
-  static const bool has = __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi");
+  static const bool has = __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi") &&
+                          __builtin_cpu_supports("avx512vl");
   return has;
 }
 
@@ -327,11 +368,61 @@ void rowDifferenceOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t*
     out[i] = int32_t(pair(qa, rows_a + i * stride, words)) - int32_t(pair(qb, rows_b + i * stride, words));
 }
 
+using ChainStepFn = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t,
+                                 size_t, uint32_t, uint32_t*);
+
+/// A chain step through a kernel's row difference, a block of columns at a time.
+template <RowDifferenceFn difference>
+uint32_t chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                     size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums)
+{
+  constexpr size_t kBlock = 64;
+  int32_t change[kBlock];
+  uint32_t smallest = UINT32_MAX;
+  for (size_t begin = 0; begin < count; begin += kBlock)
+  {
+    const size_t n = std::min(kBlock, count - begin);
+    difference(qa, rows_a + begin * stride, qb, rows_b + begin * stride, stride, words, n, change);
+    for (size_t i = 0; i < n; ++i)
+    {
+      const uint32_t old = sums[begin + i];
+      sums[begin + i] = carry + static_cast<uint32_t>(change[i]);
+      smallest = std::min(smallest, sums[begin + i]);
+      carry = old;
+    }
+  }
+  return smallest;
+}
+
+#ifdef OPENABLE_X86
+uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                         size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums)
+{
+  if (words >= 1 && words <= 8 && stride == words && hasVbmi())
+  {
+    using Packed = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, uint32_t,
+                                uint32_t*);
+    static const Packed packed[9] = {nullptr,
+                                     chainStepAvx512Packed<1>,
+                                     chainStepAvx512Packed<2>,
+                                     chainStepAvx512Packed<3>,
+                                     chainStepAvx512Packed<4>,
+                                     chainStepAvx512Packed<5>,
+                                     chainStepAvx512Packed<6>,
+                                     chainStepAvx512Packed<7>,
+                                     chainStepAvx512Packed<8>};
+    return packed[words](qa, rows_a, qb, rows_b, count, carry, sums);
+  }
+  return chainStepOf<rowDifferenceAvx512>(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+}
+#endif
+
 struct Kernel
 {
   PairFn pair;
   RowFn row;
   RowDifferenceFn difference;
+  ChainStepFn step;
 };
 
 Kernel kernelFor(HammingKernel kernel)
@@ -340,14 +431,14 @@ Kernel kernelFor(HammingKernel kernel)
   {
 #ifdef OPENABLE_X86
     case HammingKernel::kPopcnt:
-      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>};
+      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowDifferenceOf<pairPopcnt>>};
     case HammingKernel::kAvx2:
-      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>};
+      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowDifferenceOf<pairAvx2>>};
     case HammingKernel::kAvx512Vpopcntdq:
-      return {pairAvx512, rowAvx512, rowDifferenceAvx512};
+      return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512};
 #endif
     default:
-      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>};
+      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowDifferenceOf<pairPortable>>};
   }
 }
 
@@ -433,6 +524,19 @@ void hammingRowDifference(HammingKernel kernel, const uint64_t* qa, const uint64
                           const uint64_t* rows_b, size_t stride, size_t words, size_t count, int32_t* out)
 {
   checkedKernel(kernel).difference(qa, rows_a, qb, rows_b, stride, words, count, out);
+}
+
+uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                          size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums)
+{
+  return best().step(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+}
+
+uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
+                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
+                          uint32_t* sums)
+{
+  return checkedKernel(kernel).step(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
 }
 
 float l2Distance(const float* a, const float* b, size_t length)

@@ -221,23 +221,23 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
   }
   const bool can_drop = queries_ > L;  // the query L frames ago exists
   const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
-  uint32_t* previous_sum = previous_.sum.data();
-  previous_sum[0] = before.sum;
-  std::memcpy(previous_sum + 1, sum + begin, sizeof(uint32_t) * (n - 1));
 
   // The steady state: every chain of the previous frame's columns begin - 1 .. end - 2 was full, so every new
-  // one is. One fused pass computes entering minus leaving terms; the counts stay L (only the last column's
-  // is new: the others already held L).
+  // one is. One fused pass adds the entering and drops the leaving terms in place; the counts stay L (only the
+  // last column's is new: the others already held L).
   if (can_drop && begin >= L && before.count == L &&
       (was_full || allEqual(count + begin, n - 1, static_cast<uint16_t>(L))))
   {
-    metric_.rowDifference(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin - L), n,
-                          change_.data());
-    summary.minimum = addChanges(previous_sum, change_.data(), n, sum + begin);
+    summary.minimum = metric_.chainStep(query, reference.descriptor(begin), leaving_query,
+                                        reference.descriptor(begin - L), n, before.sum, sum + begin);
     summary.full = true;
     count[end - 1] = static_cast<uint16_t>(L);
     return;
   }
+
+  uint32_t* previous_sum = previous_.sum.data();
+  previous_sum[0] = before.sum;
+  std::memcpy(previous_sum + 1, sum + begin, sizeof(uint32_t) * (n - 1));
 
   uint16_t* previous_count = previous_.count.data();
   previous_count[0] = before.count;

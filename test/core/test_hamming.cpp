@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "openable/error.h"
@@ -104,6 +105,44 @@ TEST(Hamming, RowDifferenceEqualsDifferenceOfNaiveDistances)
                                   int32_t(naiveBitCount(qb.data(), rows_b.data() + i * stride, words)))
                 << kernelName(k) << " words=" << words << " stride=" << stride << " count=" << count << " row " << i;
           EXPECT_EQ(out[count], 12345) << kernelName(k) << ": wrote past the row";
+        }
+      }
+}
+
+// The in-place chain step (the steady state of the sequence sums) against a naive copy: each sum takes the
+// old sum of the column before (the carry for the first) plus the entering minus the leaving distance.
+TEST(Hamming, ChainStepEqualsNaiveShiftedSumsInPlace)
+{
+  std::mt19937_64 rng(23);
+  for (size_t words : {1u, 5u, 6u, 8u, 9u, 22u})
+    for (size_t stride : {words, words + 3})
+      for (size_t count : {0u, 1u, 7u, 8u, 9u, 17u, 300u})
+      {
+        const auto qa = randomWords(rng, words);
+        const auto qb = randomWords(rng, words);
+        const auto rows_a = randomWords(rng, stride * count + 1);
+        const auto rows_b = randomWords(rng, stride * count + 1);
+        // Old sums large enough that no new one goes negative, as in a full chain.
+        std::vector<uint32_t> old_sums(count + 1);
+        for (auto& s : old_sums)
+          s = 64 * uint32_t(words) + uint32_t(rng() % 100000);
+        const uint32_t carry = 64 * uint32_t(words) + 7;
+        std::vector<uint32_t> expected(old_sums);
+        uint32_t smallest = UINT32_MAX;
+        for (size_t i = 0; i < count; ++i)
+        {
+          expected[i] = (i == 0 ? carry : old_sums[i - 1]) + naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
+                        naiveBitCount(qb.data(), rows_b.data() + i * stride, words);
+          smallest = std::min(smallest, expected[i]);
+        }
+        for (HammingKernel k : supportedKernels())
+        {
+          std::vector<uint32_t> sums(old_sums);
+          const uint32_t minimum = hammingChainStep(k, qa.data(), rows_a.data(), qb.data(), rows_b.data(), stride,
+                                                    words, count, carry, sums.data());
+          ASSERT_EQ(sums, expected) << kernelName(k) << " words=" << words << " stride=" << stride
+                                    << " count=" << count << " (the last entry must stay untouched)";
+          ASSERT_EQ(minimum, smallest) << kernelName(k) << " words=" << words << " count=" << count;
         }
       }
 }
