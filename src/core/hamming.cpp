@@ -133,31 +133,43 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) uint32_t pairAvx512(const uin
 // eight distances with one horizontal step instead of eight reductions. W is a template parameter so that the
 // joins are fixed instructions.
 template <size_t W>
-struct PackedRows
+struct PackedLayout  ///< the constants of PackedRows for rows of W words, computed once
 {
-  __m512i pattern[W];  ///< the query repeated over eight rows: vector j holds words 8j .. 8j + 7 of that pattern
-  __m512i gather;      ///< output byte 8r + t takes the count of word W r + t (t < W) ...
-  __mmask64 keep;      ///< ... and is zero for t >= W
+  alignas(64) uint64_t lanes[W][8];  ///< lane k of pattern vector j repeats query word (8j + k) mod W
+  alignas(64) uint8_t gather[64];    ///< output byte 8r + t takes the count of word W r + t (t < W) ...
+  __mmask64 keep = 0;                ///< ... and is zero for t >= W
 
-  __attribute__((target("avx512f,avx512bw"))) explicit PackedRows(const uint64_t* q)
+  PackedLayout()
   {
     for (size_t j = 0; j < W; ++j)
-    {
-      alignas(64) uint64_t lanes[8];
       for (size_t k = 0; k < 8; ++k)
-        lanes[k] = q[(8 * j + k) % W];
-      pattern[j] = _mm512_load_si512(lanes);
-    }
-    alignas(64) uint8_t index[64];
-    keep = 0;
+        lanes[j][k] = (8 * j + k) % W;
     for (size_t r = 0; r < 8; ++r)
       for (size_t t = 0; t < 8; ++t)
       {
         const size_t word = W * r + t;  // word 8j + i of the eight rows sits in byte 8i + j of the packed counts
-        index[8 * r + t] = static_cast<uint8_t>(t < W ? 8 * (word % 8) + word / 8 : 0);
+        gather[8 * r + t] = static_cast<uint8_t>(t < W ? 8 * (word % 8) + word / 8 : 0);
         keep |= __mmask64(t < W) << (8 * r + t);
       }
-    gather = _mm512_load_si512(index);
+  }
+};
+
+template <size_t W>
+struct PackedRows
+{
+  __m512i pattern[W];  ///< the query repeated over eight rows: vector j holds words 8j .. 8j + 7 of that pattern
+  __m512i gather;      ///< see PackedLayout
+  __mmask64 keep;
+
+  // Built for every block of rows a kernel is called on, so from the constants by one permutation a vector.
+  __attribute__((target("avx512f,avx512bw"))) explicit PackedRows(const uint64_t* q)
+  {
+    static const PackedLayout<W> layout;
+    const __m512i query = _mm512_maskz_loadu_epi64(static_cast<__mmask8>((1u << W) - 1u), q);
+    for (size_t j = 0; j < W; ++j)
+      pattern[j] = _mm512_permutexvar_epi64(_mm512_load_si512(layout.lanes[j]), query);
+    gather = _mm512_load_si512(layout.gather);
+    keep = layout.keep;
   }
 
   /// Bit counts of the eight rows at `r` against the query, one byte per word (see gather).
