@@ -29,11 +29,16 @@ public:
                      size_t count, int32_t* out) const;
   /// The steady-state step of sequence sums, in place (hammingChainStep for plain binary layouts): for i < count,
   /// sums[i] = before(i) + distance(qa, rows_a[i]) - distance(qb, rows_b[i]), where before(0) = carry and
-  /// before(i) is the old sums[i - 1]. Returns the smallest new sum.
+  /// before(i) is the old sums[i - 1]. Returns the smallest new sum. 16-bit sums only where they fit.
   uint32_t chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
                      size_t count, uint32_t carry, uint32_t* sums) const;
+  uint32_t chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                     size_t count, uint32_t carry, uint16_t* sums) const;
 
 private:
+  template <typename Sum>
+  uint32_t chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                       size_t count, uint32_t carry, Sum* sums) const;
   uint32_t blockDistance(const uint64_t* a, const uint64_t* b) const;
   DescriptorLayout layout_;
 };

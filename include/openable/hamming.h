@@ -43,12 +43,18 @@ void hammingRowDifference(HammingKernel kernel, const uint64_t* qa, const uint64
 /// One step of the sequence sums along diagonals (sequence_matcher.h), in place: for i < count,
 ///   sums[i] = before(i) + hamming(qa, rows_a + i * stride, words) - hamming(qb, rows_b + i * stride, words)
 /// where before(0) = carry and before(i) is the old sums[i - 1]. Returns the smallest new sum (UINT32_MAX when
-/// count is 0). The caller ensures no sum goes below 0: the leaving term is part of the old sum.
+/// count is 0). The caller ensures every new sum fits its type: the leaving term is part of the old sum, and
+/// 16-bit sums are for chains whose largest sum fits 16 bits (half the state read and written every frame).
 uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
                           size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums);
+uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                          size_t stride, size_t words, size_t count, uint32_t carry, uint16_t* sums);
 uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
                           const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
                           uint32_t* sums);
+uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
+                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
+                          uint16_t* sums);
 
 /// Euclidean distance between two float vectors.
 float l2Distance(const float* a, const float* b, size_t length);

@@ -52,7 +52,7 @@ public:
   }
   size_t columns() const
   {
-    return forward_.sum.size();
+    return forward_.size();
   }
   /// Query frames seen since the last reset.
   uint64_t queries() const
@@ -62,7 +62,7 @@ public:
 
   uint32_t forwardSum(size_t column) const
   {
-    return forward_.sum[column];
+    return forward_.sum(column);
   }
   uint16_t forwardCount(size_t column) const
   {
@@ -70,7 +70,7 @@ public:
   }
   uint32_t reverseSum(size_t column) const
   {
-    return reverse_.sum[column];
+    return reverse_.sum(column);
   }
   uint16_t reverseCount(size_t column) const
   {
@@ -95,10 +95,46 @@ public:
   size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const;
 
 private:
-  struct Chains
+  /// The chains of one direction: a sum and a term count a column. The sums are 16-bit when every possible sum
+  /// fits (L times the largest frame distance below 65536: HOG-B up to L = 170), else 32-bit: the sums are the
+  /// state read and written every frame beside the descriptors, so narrow ones save memory traffic.
+  class Chains
   {
-    std::vector<uint32_t> sum;
+  public:
+    /// `columns` empty chains.
+    void assign(size_t columns, bool narrow);
+    size_t size() const
+    {
+      return count.size();
+    }
+    /// New columns get empty chains.
+    void resize(size_t columns);
+    void eraseFront(size_t columns);
+    uint32_t sum(size_t column) const
+    {
+      return narrow_ ? narrow_sums_[column] : wide_sums_[column];
+    }
+    void set(size_t column, uint32_t sum, uint16_t terms)
+    {
+      if (narrow_)
+        narrow_sums_[column] = static_cast<uint16_t>(sum);
+      else
+        wide_sums_[column] = sum;
+      count[column] = terms;
+    }
+    /// f(pointer to the first sum), whichever their width.
+    template <typename F>
+    auto withSums(F f)
+    {
+      return narrow_ ? f(narrow_sums_.data()) : f(wide_sums_.data());
+    }
+
     std::vector<uint16_t> count;
+
+  private:
+    bool narrow_ = false;
+    std::vector<uint16_t> narrow_sums_;
+    std::vector<uint32_t> wide_sums_;
   };
   /// One chunk of columns after match(): when `full`, every chain in it (both directions with bidirectional)
   /// holds L terms and `minimum` is the smallest of their sums.
@@ -124,6 +160,7 @@ private:
 
   FrameMetric metric_;
   int sequence_length_;
+  bool narrow_sums_ = false;  ///< see Chains
   bool bidirectional_;
   uint64_t queries_ = 0;
   uint64_t first_id_ = 0;
@@ -136,7 +173,8 @@ private:
   std::vector<uint32_t> entering_;  ///< d(t, j)
   std::vector<uint32_t> leaving_;   ///< d(t - L, j -/+ L)
   std::vector<int32_t> change_;     ///< entering - leaving
-  Chains previous_;                 ///< the previous frame's chains of columns j - 1
+  std::vector<uint32_t> previous_sum_;    ///< the previous frame's chains of the columns each one continues
+  std::vector<uint16_t> previous_count_;
 };
 
 }  // namespace openable

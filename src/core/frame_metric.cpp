@@ -98,21 +98,35 @@ void FrameMetric::rowDifference(const uint64_t* qa, const uint64_t* rows_a, cons
     out[i] = int32_t(distance(qa, rows_a + i * stride)) - int32_t(distance(qb, rows_b + i * stride));
 }
 
-uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                                size_t count, uint32_t carry, uint32_t* sums) const
+template <typename Sum>
+uint32_t FrameMetric::chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
+                                  const uint64_t* rows_b, size_t count, uint32_t carry, Sum* sums) const
 {
   const size_t stride = layout_.frameWords();
   if (layout_.binary && layout_.blocks == 1)
     return hammingChainStep(qa, rows_a, qb, rows_b, stride, stride, count, carry, sums);
   uint32_t smallest = UINT32_MAX;
+  Sum before = static_cast<Sum>(carry);
   for (size_t i = 0; i < count; ++i)
   {
-    const uint32_t old = sums[i];
-    sums[i] = carry + distance(qa, rows_a + i * stride) - distance(qb, rows_b + i * stride);
-    smallest = std::min(smallest, sums[i]);
-    carry = old;
+    const Sum old = sums[i];
+    sums[i] = static_cast<Sum>(before + distance(qa, rows_a + i * stride) - distance(qb, rows_b + i * stride));
+    smallest = std::min<uint32_t>(smallest, sums[i]);
+    before = old;
   }
   return smallest;
+}
+
+uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                                size_t count, uint32_t carry, uint32_t* sums) const
+{
+  return chainStepOf(qa, rows_a, qb, rows_b, count, carry, sums);
+}
+
+uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                                size_t count, uint32_t carry, uint16_t* sums) const
+{
+  return chainStepOf(qa, rows_a, qb, rows_b, count, carry, sums);
 }
 
 }  // namespace openable

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "openable/error.h"
 
@@ -223,41 +224,103 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowD
     out[i] = int32_t(pairAvx512Inline(qa, rows_a + i * W, W)) - int32_t(pairAvx512Inline(qb, rows_b + i * W, W));
 }
 
+// Eight sums of a chain step in a register: 32-bit sums in a ymm, 16-bit ones in an xmm (half the bytes).
+template <typename Sum>
+struct SumLanes;
+
+template <>
+struct SumLanes<uint32_t>
+{
+  using Vector = __m256i;
+  __attribute__((target("avx512f,avx512vl"))) static Vector broadcast(uint32_t value)
+  {
+    return _mm256_set1_epi32(static_cast<int>(value));
+  }
+  __attribute__((target("avx512f,avx512vl"))) static Vector narrow(__m256i change)
+  {
+    return change;
+  }
+  /// Lane 7 of `before`, then lanes 0 .. 6 of `old`: the old sums one column to the left.
+  __attribute__((target("avx512f,avx512vl"))) static Vector left(Vector old, Vector before)
+  {
+    return _mm256_alignr_epi32(old, before, 7);
+  }
+  __attribute__((target("avx512f,avx512vl"))) static Vector add(Vector a, Vector b)
+  {
+    return _mm256_add_epi32(a, b);
+  }
+  __attribute__((target("avx512f,avx512vl"))) static Vector min(Vector a, Vector b)
+  {
+    return _mm256_min_epu32(a, b);
+  }
+};
+
+template <>
+struct SumLanes<uint16_t>
+{
+  using Vector = __m128i;
+  __attribute__((target("avx512f,avx512vl"))) static Vector broadcast(uint32_t value)
+  {
+    return _mm_set1_epi16(static_cast<short>(value));
+  }
+  /// The differences are at most +-64 W: their low 16 bits added modulo 2^16 give the exact sum, which fits.
+  __attribute__((target("avx512f,avx512vl"))) static Vector narrow(__m256i change)
+  {
+    return _mm256_cvtepi32_epi16(change);
+  }
+  __attribute__((target("avx512f,avx512vl"))) static Vector left(Vector old, Vector before)
+  {
+    return _mm_alignr_epi8(old, before, 14);
+  }
+  __attribute__((target("avx512f,avx512vl"))) static Vector add(Vector a, Vector b)
+  {
+    return _mm_add_epi16(a, b);
+  }
+  __attribute__((target("avx512f,avx512vl"))) static Vector min(Vector a, Vector b)
+  {
+    return _mm_min_epu16(a, b);
+  }
+};
+
 // One step of the sequence sums (hammingChainStep) on packed small rows: the eight differences of
 // rowDifferenceAvx512Packed are added to the old sums one column to the left, in place. Column i's old sum is
 // loaded before it is overwritten and the old sums of the eight columns before stay in a register, from which
-// valignd takes the one to the left: no copy of the sums and no array of differences in between.
-template <size_t W>
+// valignd / palignr takes the one to the left: no copy of the sums and no array of differences in between.
+template <size_t W, typename Sum>
 __attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) uint32_t chainStepAvx512Packed(
     const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b, size_t count,
-    uint32_t carry, uint32_t* sums)
+    uint32_t carry, Sum* sums)
 {
+  using Lanes = SumLanes<Sum>;
+  using Vector = typename Lanes::Vector;
   const PackedRows<W> a(qa), b(qb);
   const __m512i bias = _mm512_set1_epi8(64);
   const __m256i total_bias = _mm256_set1_epi32(64 * W);
-  __m256i old_before = _mm256_set1_epi32(static_cast<int>(carry));  // lane 7: the old sum left of column i
-  __m256i minimum = _mm256_set1_epi32(-1);
+  Vector old_before = Lanes::broadcast(carry);  // lane 7: the old sum left of column i
+  Vector minimum = Lanes::broadcast(UINT32_MAX);
   size_t i = 0;
   for (; i + 8 <= count; i += 8)
   {
     const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(rows_a + i * W), bias), b.counts(rows_b + i * W));
-    const __m256i change = _mm256_sub_epi32(a.sums(bytes), total_bias);
-    const __m256i old = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(sums + i));
-    const __m256i updated = _mm256_add_epi32(_mm256_alignr_epi32(old, old_before, 7), change);
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(sums + i), updated);
-    minimum = _mm256_min_epu32(minimum, updated);
+    const Vector change = Lanes::narrow(_mm256_sub_epi32(a.sums(bytes), total_bias));
+    Vector old;
+    std::memcpy(&old, sums + i, sizeof(Vector));  // one unaligned vector load
+    const Vector updated = Lanes::add(Lanes::left(old, old_before), change);
+    std::memcpy(sums + i, &updated, sizeof(Vector));
+    minimum = Lanes::min(minimum, updated);
     old_before = old;
   }
-  alignas(32) uint32_t lanes[8];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), minimum);
+  Sum lanes[8];
+  std::memcpy(lanes, &minimum, sizeof(lanes));
   uint32_t smallest = *std::min_element(lanes, lanes + 8);
-  carry = static_cast<uint32_t>(_mm256_extract_epi32(old_before, 7));
+  std::memcpy(lanes, &old_before, sizeof(lanes));
+  Sum before = i > 0 ? lanes[7] : static_cast<Sum>(carry);
   for (; i < count; ++i)
   {
-    const uint32_t old = sums[i];
-    sums[i] = carry + pairAvx512Inline(qa, rows_a + i * W, W) - pairAvx512Inline(qb, rows_b + i * W, W);
-    smallest = std::min(smallest, sums[i]);
-    carry = old;
+    const Sum old = sums[i];
+    sums[i] = static_cast<Sum>(before + pairAvx512Inline(qa, rows_a + i * W, W) - pairAvx512Inline(qb, rows_b + i * W, W));
+    smallest = std::min<uint32_t>(smallest, sums[i]);
+    before = old;
   }
   return smallest;
 }
@@ -380,52 +443,55 @@ void rowDifferenceOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t*
     out[i] = int32_t(pair(qa, rows_a + i * stride, words)) - int32_t(pair(qb, rows_b + i * stride, words));
 }
 
+template <typename Sum>
 using ChainStepFn = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t,
-                                 size_t, uint32_t, uint32_t*);
+                                 size_t, uint32_t, Sum*);
 
 /// A chain step through a kernel's row difference, a block of columns at a time.
-template <RowDifferenceFn difference>
+template <RowDifferenceFn difference, typename Sum>
 uint32_t chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                     size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums)
+                     size_t stride, size_t words, size_t count, uint32_t carry, Sum* sums)
 {
   constexpr size_t kBlock = 64;
   int32_t change[kBlock];
   uint32_t smallest = UINT32_MAX;
+  Sum before = static_cast<Sum>(carry);
   for (size_t begin = 0; begin < count; begin += kBlock)
   {
     const size_t n = std::min(kBlock, count - begin);
     difference(qa, rows_a + begin * stride, qb, rows_b + begin * stride, stride, words, n, change);
     for (size_t i = 0; i < n; ++i)
     {
-      const uint32_t old = sums[begin + i];
-      sums[begin + i] = carry + static_cast<uint32_t>(change[i]);
-      smallest = std::min(smallest, sums[begin + i]);
-      carry = old;
+      const Sum old = sums[begin + i];
+      sums[begin + i] = static_cast<Sum>(before + change[i]);
+      smallest = std::min<uint32_t>(smallest, sums[begin + i]);
+      before = old;
     }
   }
   return smallest;
 }
 
 #ifdef OPENABLE_X86
+template <typename Sum>
 uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                         size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums)
+                         size_t stride, size_t words, size_t count, uint32_t carry, Sum* sums)
 {
   if (words >= 1 && words <= 8 && stride == words && hasVbmi())
   {
     using Packed = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, uint32_t,
-                                uint32_t*);
+                                Sum*);
     static const Packed packed[9] = {nullptr,
-                                     chainStepAvx512Packed<1>,
-                                     chainStepAvx512Packed<2>,
-                                     chainStepAvx512Packed<3>,
-                                     chainStepAvx512Packed<4>,
-                                     chainStepAvx512Packed<5>,
-                                     chainStepAvx512Packed<6>,
-                                     chainStepAvx512Packed<7>,
-                                     chainStepAvx512Packed<8>};
+                                     chainStepAvx512Packed<1, Sum>,
+                                     chainStepAvx512Packed<2, Sum>,
+                                     chainStepAvx512Packed<3, Sum>,
+                                     chainStepAvx512Packed<4, Sum>,
+                                     chainStepAvx512Packed<5, Sum>,
+                                     chainStepAvx512Packed<6, Sum>,
+                                     chainStepAvx512Packed<7, Sum>,
+                                     chainStepAvx512Packed<8, Sum>};
     return packed[words](qa, rows_a, qb, rows_b, count, carry, sums);
   }
-  return chainStepOf<rowDifferenceAvx512>(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+  return chainStepOf<rowDifferenceAvx512, Sum>(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
 }
 #endif
 
@@ -434,7 +500,8 @@ struct Kernel
   PairFn pair;
   RowFn row;
   RowDifferenceFn difference;
-  ChainStepFn step;
+  ChainStepFn<uint32_t> step;
+  ChainStepFn<uint16_t> step16;
 };
 
 Kernel kernelFor(HammingKernel kernel)
@@ -443,14 +510,17 @@ Kernel kernelFor(HammingKernel kernel)
   {
 #ifdef OPENABLE_X86
     case HammingKernel::kPopcnt:
-      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowDifferenceOf<pairPopcnt>>};
+      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowDifferenceOf<pairPopcnt>, uint32_t>,
+              chainStepOf<rowDifferenceOf<pairPopcnt>, uint16_t>};
     case HammingKernel::kAvx2:
-      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowDifferenceOf<pairAvx2>>};
+      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowDifferenceOf<pairAvx2>, uint32_t>,
+              chainStepOf<rowDifferenceOf<pairAvx2>, uint16_t>};
     case HammingKernel::kAvx512Vpopcntdq:
-      return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512};
+      return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>, chainStepAvx512<uint16_t>};
 #endif
     default:
-      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowDifferenceOf<pairPortable>>};
+      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowDifferenceOf<pairPortable>, uint32_t>,
+              chainStepOf<rowDifferenceOf<pairPortable>, uint16_t>};
   }
 }
 
@@ -544,11 +614,24 @@ uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint
   return best().step(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
 }
 
+uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
+                          size_t stride, size_t words, size_t count, uint32_t carry, uint16_t* sums)
+{
+  return best().step16(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+}
+
 uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
                           const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
                           uint32_t* sums)
 {
   return checkedKernel(kernel).step(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+}
+
+uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
+                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
+                          uint16_t* sums)
+{
+  return checkedKernel(kernel).step16(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
 }
 
 float l2Distance(const float* a, const float* b, size_t length)

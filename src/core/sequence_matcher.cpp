@@ -54,18 +54,42 @@ bool allEqual(const uint16_t* counts, size_t n, uint16_t value)
 
 /// out[i] = previous[i] + change[i] for i < n, and their minimum: the steady-state recurrence, branch-free so
 /// that it vectorises. The sums are exact: a chain's sum minus its leaving term is never negative.
+template <typename Sum>
 uint32_t addChanges(const uint32_t* __restrict previous, const int32_t* __restrict change, size_t n,
-                    uint32_t* __restrict out)
+                    Sum* __restrict out)
 {
   uint32_t minimum = UINT32_MAX;
   for (size_t i = 0; i < n; ++i)
   {
-    out[i] = previous[i] + static_cast<uint32_t>(change[i]);
-    minimum = std::min(minimum, out[i]);
+    out[i] = static_cast<Sum>(previous[i] + static_cast<uint32_t>(change[i]));
+    minimum = std::min<uint32_t>(minimum, out[i]);
   }
   return minimum;
 }
 }  // namespace
+
+void SequenceMatcher::Chains::assign(size_t columns, bool narrow)
+{
+  narrow_ = narrow;
+  narrow_sums_.assign(narrow ? columns : 0, 0);
+  wide_sums_.assign(narrow ? 0 : columns, 0);
+  count.assign(columns, 0);
+}
+
+void SequenceMatcher::Chains::resize(size_t columns)
+{
+  (narrow_ ? narrow_sums_.resize(columns) : wide_sums_.resize(columns));
+  count.resize(columns);
+}
+
+void SequenceMatcher::Chains::eraseFront(size_t columns)
+{
+  const auto erase = [&](auto& values)
+  { values.erase(values.begin(), values.begin() + static_cast<long>(std::min(columns, values.size()))); };
+  erase(narrow_sums_);
+  erase(wide_sums_);
+  erase(count);
+}
 
 SequenceMatcher::SequenceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional)
   : metric_(layout), sequence_length_(1), bidirectional_(bidirectional)
@@ -74,8 +98,8 @@ SequenceMatcher::SequenceMatcher(const DescriptorLayout& layout, int sequence_le
   entering_.resize(kChunk);
   leaving_.resize(kChunk);
   change_.resize(kChunk);
-  previous_.sum.resize(kChunk);
-  previous_.count.resize(kChunk);
+  previous_sum_.resize(kChunk);
+  previous_count_.resize(kChunk);
 }
 
 void SequenceMatcher::setSequenceLength(int sequence_length)
@@ -91,10 +115,9 @@ void SequenceMatcher::setSequenceLength(int sequence_length)
   const size_t words = metric_.layout().frameWords();
   std::vector<uint64_t> recent(words * (sequence_length_ + 1), 0);
   recent_.swap(recent);
-  std::fill(forward_.sum.begin(), forward_.sum.end(), 0u);
-  std::fill(forward_.count.begin(), forward_.count.end(), uint16_t(0));
-  std::fill(reverse_.sum.begin(), reverse_.sum.end(), 0u);
-  std::fill(reverse_.count.begin(), reverse_.count.end(), uint16_t(0));
+  narrow_sums_ = uint64_t(sequence_length) * metric_.layout().maxFrameDistance() <= UINT16_MAX;
+  forward_.assign(forward_.size(), narrow_sums_);
+  reverse_.assign(reverse_.size(), narrow_sums_);
   summaries_.clear();
   // Chains restart: the ring no longer holds the frames that would leave them. Count queries from here.
   queries_ = 0;
@@ -104,8 +127,7 @@ void SequenceMatcher::setBidirectional(bool bidirectional)
 {
   if (bidirectional && !bidirectional_)
   {
-    reverse_.sum.assign(forward_.sum.size(), 0u);
-    reverse_.count.assign(forward_.count.size(), 0);
+    reverse_.assign(forward_.size(), narrow_sums_);
   }
   bidirectional_ = bidirectional;
   summaries_.clear();
@@ -115,8 +137,8 @@ void SequenceMatcher::reset()
 {
   queries_ = 0;
   first_id_ = 0;
-  forward_ = Chains();
-  reverse_ = Chains();
+  forward_.assign(0, narrow_sums_);
+  reverse_.assign(0, narrow_sums_);
   summaries_.clear();
 }
 
@@ -149,28 +171,20 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
   if (new_first != first_id_)
   {
     previous_summaries_.clear();
-    const size_t gone = static_cast<size_t>(std::min<uint64_t>(new_first - first_id_, forward_.sum.size()));
-    for (Chains* chains : {&forward_, &reverse_})
-    {
-      const size_t n = std::min(gone, chains->sum.size());
-      chains->sum.erase(chains->sum.begin(), chains->sum.begin() + static_cast<long>(n));
-      chains->count.erase(chains->count.begin(), chains->count.begin() + static_cast<long>(n));
-    }
+    const size_t gone = static_cast<size_t>(std::min<uint64_t>(new_first - first_id_, forward_.size()));
+    forward_.eraseFront(gone);
+    reverse_.eraseFront(gone);
     first_id_ = new_first;
   }
 
   // The chains are updated in place, one chunk of columns after the other, both directions in the same pass
   // over the descriptors. Columns that did not exist in the previous frame start with count 0 (no chain).
   const size_t columns = candidates;
-  const size_t old_forward_columns = forward_.count.size();
-  forward_.sum.resize(columns);
-  forward_.count.resize(columns);
-  const size_t old_reverse_columns = reverse_.count.size();
+  const size_t old_forward_columns = forward_.size();
+  forward_.resize(columns);
+  const size_t old_reverse_columns = reverse_.size();
   if (bidirectional_ && old_reverse_columns < columns)
-  {
-    reverse_.sum.resize(columns);
-    reverse_.count.resize(columns);
-  }
+    reverse_.resize(columns);
   summaries_.assign((columns + kChunk - 1) / kChunk, ChunkSummary());
   const auto wasFull = [&](size_t chunk)
   { return chunk < previous_summaries_.size() && previous_summaries_[chunk].full; };
@@ -189,8 +203,7 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
   if (bidirectional_)
   {
     // Only now: the reverse chain of the last column continued the previous frame's of the next one.
-    reverse_.sum.resize(columns);
-    reverse_.count.resize(columns);
+    reverse_.resize(columns);
   }
 }
 
@@ -204,18 +217,19 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
 {
   const size_t L = sequence_length_;
   const size_t n = end - begin;
-  uint32_t* sum = forward_.sum.data();
   uint16_t* count = forward_.count.data();
   const uint64_t* query = recentQuery(0);
   const Carry before = carry;
-  carry = Carry{sum[end - 1], count[end - 1]};
+  carry = Carry{forward_.sum(end - 1), count[end - 1]};
+  uint32_t* entering = entering_.data();
 
   if (L == 1)
   {
     // Every sequence is the current frame alone: nothing to carry over or drop.
-    metric_.row(query, reference.descriptor(begin), n, sum + begin);
-    std::fill(count + begin, count + end, uint16_t(1));
-    summary.minimum = *std::min_element(sum + begin, sum + end);
+    metric_.row(query, reference.descriptor(begin), n, entering);
+    for (size_t i = 0; i < n; ++i)
+      forward_.set(begin + i, entering[i], 1);
+    summary.minimum = *std::min_element(entering, entering + n);
     summary.full = true;
     return;
   }
@@ -228,21 +242,26 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
   if (can_drop && begin >= L && before.count == L &&
       (was_full || allEqual(count + begin, n - 1, static_cast<uint16_t>(L))))
   {
-    summary.minimum = metric_.chainStep(query, reference.descriptor(begin), leaving_query,
-                                        reference.descriptor(begin - L), n, before.sum, sum + begin);
+    summary.minimum = forward_.withSums(
+        [&](auto* sums)
+        {
+          return metric_.chainStep(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin - L),
+                                   n, before.sum, sums + begin);
+        });
     summary.full = true;
     count[end - 1] = static_cast<uint16_t>(L);
     return;
   }
 
-  uint32_t* previous_sum = previous_.sum.data();
+  uint32_t* previous_sum = previous_sum_.data();
+  uint16_t* previous_count = previous_count_.data();
   previous_sum[0] = before.sum;
-  std::memcpy(previous_sum + 1, sum + begin, sizeof(uint32_t) * (n - 1));
-
-  uint16_t* previous_count = previous_.count.data();
   previous_count[0] = before.count;
-  std::memcpy(previous_count + 1, count + begin, sizeof(uint16_t) * (n - 1));
-  uint32_t* entering = entering_.data();
+  for (size_t i = 1; i < n; ++i)
+  {
+    previous_sum[i] = forward_.sum(begin + i - 1);
+    previous_count[i] = count[begin + i - 1];
+  }
   metric_.row(query, reference.descriptor(begin), n, entering);
   const size_t drop_begin = std::max(begin, L);  // d(t - L, j - L) where j - L is stored
   if (can_drop && drop_begin < end)
@@ -252,8 +271,10 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
   for (size_t i = 0; i < n; ++i)
   {
     const size_t c = begin + i;
-    extendChain(previous_sum[i], previous_count[i], entering[i], leaving_[i], c >= L && can_drop, L, sum[c],
-                count[c]);
+    uint32_t sum;
+    uint16_t terms;
+    extendChain(previous_sum[i], previous_count[i], entering[i], leaving_[i], c >= L && can_drop, L, sum, terms);
+    forward_.set(c, sum, terms);
   }
 }
 
@@ -270,18 +291,22 @@ void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t begi
   const uint64_t* query = recentQuery(0);
   const uint64_t* leaving_query = can_drop ? recentQuery(L) : nullptr;
   const size_t drop_end = std::min(end, stored > L ? stored - L : 0);  // d(t - L, j + L) where j + L is stored
-  uint32_t* sum = reverse_.sum.data();
   uint16_t* count = reverse_.count.data();
-  uint32_t* previous_sum = previous_.sum.data();
-  uint16_t* previous_count = previous_.count.data();
+  uint32_t* previous_sum = previous_sum_.data();
+  uint16_t* previous_count = previous_count_.data();
 
   if (can_drop && end <= drop_end && end < old_columns &&
       (was_full || allEqual(count + begin + 1, n, static_cast<uint16_t>(L))))
   {
     metric_.rowDifference(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin + L), n,
                           change_.data());
-    std::memcpy(previous_sum, sum + begin + 1, sizeof(uint32_t) * n);
-    summary.minimum = std::min(summary.minimum, addChanges(previous_sum, change_.data(), n, sum + begin));
+    const uint32_t minimum = reverse_.withSums(
+        [&](auto* sums)
+        {
+          std::copy(sums + begin + 1, sums + end + 1, previous_sum);
+          return addChanges(previous_sum, change_.data(), n, sums + begin);
+        });
+    summary.minimum = std::min(summary.minimum, minimum);
     count[begin] = static_cast<uint16_t>(L);
     return;
   }
@@ -295,13 +320,15 @@ void SequenceMatcher::advanceReverse(const PlaceDatabase& reference, size_t begi
   {
     const size_t c = begin + i;
     previous_count[i] = c + 1 < old_columns ? count[c + 1] : 0;
-    previous_sum[i] = c + 1 < old_columns ? sum[c + 1] : 0;
+    previous_sum[i] = c + 1 < old_columns ? reverse_.sum(c + 1) : 0;
   }
   for (size_t i = 0; i < n; ++i)
   {
     const size_t c = begin + i;
-    extendChain(previous_sum[i], previous_count[i], entering[i], leaving_[i], c < drop_end && can_drop, L, sum[c],
-                count[c]);
+    uint32_t sum;
+    uint16_t terms;
+    extendChain(previous_sum[i], previous_count[i], entering[i], leaving_[i], c < drop_end && can_drop, L, sum, terms);
+    reverse_.set(c, sum, terms);
   }
 }
 
@@ -309,14 +336,14 @@ float SequenceMatcher::normalized(size_t column, int* direction, int min_terms) 
 {
   const int needed = std::max(1, min_terms);
   const uint16_t n = forward_.count[column];
-  float best = n >= needed ? meanTerm(forward_.sum[column], n) : std::nanf("");
+  float best = n >= needed ? meanTerm(forward_.sum(column), n) : std::nanf("");
   int dir = 1;
   if (bidirectional_)
   {
     const uint16_t r = reverse_.count[column];
     if (r >= needed)
     {
-      const float reverse = meanTerm(reverse_.sum[column], r);
+      const float reverse = meanTerm(reverse_.sum(column), r);
       if (!(reverse >= best))  // also when best is NaN
       {
         best = reverse;

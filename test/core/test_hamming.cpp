@@ -143,6 +143,31 @@ TEST(Hamming, ChainStepEqualsNaiveShiftedSumsInPlace)
           ASSERT_EQ(sums, expected) << kernelName(k) << " words=" << words << " stride=" << stride
                                     << " count=" << count << " (the last entry must stay untouched)";
           ASSERT_EQ(minimum, smallest) << kernelName(k) << " words=" << words << " count=" << count;
+          // 16-bit sums, where every sum fits (the old ones taken modulo 2^16 keep the new ones in range).
+          if (words > 8)
+            continue;
+          std::vector<uint16_t> narrow(old_sums.size());
+          uint16_t narrow_smallest = UINT16_MAX;
+          std::vector<uint16_t> narrow_expected(old_sums.size());
+          for (size_t i = 0; i < old_sums.size(); ++i)
+          {
+            narrow[i] = static_cast<uint16_t>(64 * words + old_sums[i] % 60000);
+            narrow_expected[i] = narrow[i];
+          }
+          for (size_t i = 0; i < count; ++i)
+          {
+            narrow_expected[i] = static_cast<uint16_t>(
+                (i == 0 ? carry : narrow[i - 1]) + naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
+                naiveBitCount(qb.data(), rows_b.data() + i * stride, words));
+            narrow_smallest = std::min(narrow_smallest, narrow_expected[i]);
+          }
+          const uint32_t narrow_minimum = hammingChainStep(k, qa.data(), rows_a.data(), qb.data(), rows_b.data(),
+                                                           stride, words, count, carry, narrow.data());
+          ASSERT_EQ(narrow, narrow_expected) << kernelName(k) << " 16-bit, words=" << words << " count=" << count;
+          if (count > 0)
+          {
+            ASSERT_EQ(narrow_minimum, narrow_smallest) << kernelName(k) << " 16-bit, words=" << words;
+          }
         }
       }
 }

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <functional>
+#include <utility>
+#include <vector>
 
 #include "openable/error.h"
 #include "openable/frame_metric.h"
@@ -207,14 +209,16 @@ TEST(SequenceMatcher, BoundedHistoryKeepsFullSequencesExact)
 }
 
 // Hundreds of columns: the in-place update crosses chunk boundaries (256 columns), and the candidate range
-// shrinks and grows from frame to frame, so chains start, stop and restart inside and across chunks.
+// shrinks and grows from frame to frame, so chains start, stop and restart inside and across chunks. Both
+// widths of sums: 16-bit while L times the largest frame distance fits (HOG-B's 6 words, 384 bits, and 22
+// words with L = 20: 28,160), 32-bit beyond (22 words, 1,408 bits, with L = 47: 66,176).
 TEST(SequenceMatcher, ManyColumnsWithChangingCandidatesEqualBruteForce)
 {
   std::mt19937_64 rng(23);
-  for (int L : {1, 2, 20})
+  for (const auto& [words, L] : std::vector<std::pair<int, int>>{{6, 1}, {6, 2}, {6, 20}, {22, 20}, {22, 47}})
     for (bool bidirectional : {false, true})
     {
-      const auto layout = binaryLayout(6);  // HOG-B's 6 words: the fused AVX-512 kernel
+      const auto layout = binaryLayout(words);  // 6: HOG-B, the fused AVX-512 kernel; 22: LDB's size
       const FrameMetric metric(layout);
       PlaceDatabase map(layout);
       std::vector<size_t> candidates_of;  // by query
@@ -222,16 +226,16 @@ TEST(SequenceMatcher, ManyColumnsWithChangingCandidatesEqualBruteForce)
       for (int i = 0; i < 700; ++i)
       {
         // Few distinct descriptors: many equal sums.
-        bf.reference.push_back(i % 5 == 0 && i > 0 ? bf.reference[i / 2] : openable_test::randomWords(rng, 6));
+        bf.reference.push_back(i % 5 == 0 && i > 0 ? bf.reference[i / 2] : openable_test::randomWords(rng, words));
         map.add(bf.reference.back());
       }
       SequenceMatcher m(layout, L, bidirectional);
-      for (long t = 0; t < 45; ++t)
+      for (long t = 0; t < L + 25; ++t)  // full chains for the last 25 frames at least
       {
         // Mostly everything, sometimes a few columns fewer or far fewer (across a chunk boundary).
         const size_t roll = rng() % 8;
         candidates_of.push_back(roll == 0 ? 700 - rng() % 3 : roll == 1 ? 200 + rng() % 120 : 700);
-        bf.queries.push_back(t % 4 == 0 ? bf.reference[(t * 37) % 700] : openable_test::randomWords(rng, 6));
+        bf.queries.push_back(t % 4 == 0 ? bf.reference[(t * 37) % 700] : openable_test::randomWords(rng, words));
         m.match(bf.queries.back().data(), map, candidates_of.back());
         ASSERT_EQ(m.columns(), candidates_of.back());
         expectRowMatches(m, bf, t, L, bidirectional, 0);
