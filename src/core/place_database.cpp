@@ -4,6 +4,10 @@
 #include <cstdlib>
 #include <cstring>
 
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
+
 #include "map/map_file.h"
 #include "openable/error.h"
 
@@ -12,6 +16,26 @@ namespace openable
 namespace
 {
 constexpr size_t kAlignment = 64;
+constexpr size_t kHugePage = size_t(2) << 20;
+/// From here on the descriptors go on 2 MiB pages where the kernel has them (transparent huge pages):
+/// every frame streams the whole history, and on 4 KiB pages a 480 MB map is 120,000 TLB misses a pass. The
+/// block is rounded up to whole huge pages, so the threshold keeps that rounding below 6 %.
+constexpr size_t kHugePagesFrom = size_t(32) << 20;
+
+/// A block for `bytes` of descriptors, 64-byte aligned (a descriptor row starts a cache line when the stride
+/// is a multiple of 8 words); null when out of memory. Freed with std::free.
+uint64_t* allocateDescriptors(size_t bytes)
+{
+  if (bytes < kHugePagesFrom)
+    return static_cast<uint64_t*>(std::aligned_alloc(kAlignment, (bytes + kAlignment - 1) / kAlignment * kAlignment));
+  const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
+  void* block = std::aligned_alloc(kHugePage, rounded);
+#ifdef MADV_HUGEPAGE
+  if (block)
+    madvise(block, rounded, MADV_HUGEPAGE);  // advice only: without huge pages the block works the same
+#endif
+  return static_cast<uint64_t*>(block);
+}
 }  // namespace
 
 PlaceDatabase::PlaceDatabase(const DescriptorLayout& layout, size_t capacity, std::string config_yaml)
@@ -73,8 +97,7 @@ void PlaceDatabase::reserve(size_t frames)
 {
   if (frames <= allocated_)
     return;
-  const size_t bytes = (sizeof(uint64_t) * stride_ * frames + kAlignment - 1) / kAlignment * kAlignment;
-  auto* data = static_cast<uint64_t*>(std::aligned_alloc(kAlignment, bytes));
+  auto* data = allocateDescriptors(sizeof(uint64_t) * stride_ * frames);
   if (!data)
     throw Error("PlaceDatabase: out of memory for " + std::to_string(frames) + " frames");
   if (data_)
@@ -174,8 +197,7 @@ void PlaceDatabase::shrinkToFit()
   sources_.shrinkToFit();
   if (allocated_ == size() || size() == 0)
     return;
-  const size_t bytes = (sizeof(uint64_t) * stride_ * size() + kAlignment - 1) / kAlignment * kAlignment;
-  auto* data = static_cast<uint64_t*>(std::aligned_alloc(kAlignment, bytes));
+  auto* data = allocateDescriptors(sizeof(uint64_t) * stride_ * size());
   if (!data)
     return;  // keeping the larger block is correct, only less lean
   std::memcpy(data, data_, sizeof(uint64_t) * stride_ * size());

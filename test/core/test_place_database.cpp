@@ -74,6 +74,35 @@ TEST(PlaceDatabase, StoresContiguousAlignedDescriptorsWithIds)
   EXPECT_GE(db.bytes(), 100u * 22 * 8);
 }
 
+// A map past 32 MiB of descriptors is held on whole 2 MiB blocks (transparent huge pages where the kernel
+// has them): still contiguous, and its descriptors survive growing past the reserve and shrinking.
+TEST(PlaceDatabase, LargeMapsSitOnHugePageBlocksAndKeepTheirDescriptors)
+{
+  PlaceDatabase db(layout22());
+  const size_t frames = (size_t(40) << 20) / (22 * 8);  // 40 MiB of descriptors
+  db.reserve(frames);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(db.data()) % (size_t(2) << 20), 0u);
+  std::mt19937_64 rng(5);
+  std::vector<std::vector<uint64_t>> kept;
+  for (size_t i = 0; i < frames + 10; ++i)  // past the reserve: the block grows and is copied
+  {
+    std::vector<uint64_t> d = openable_test::randomWords(rng, 22);
+    if (i % 100000 == 0 || i + 3 >= frames + 10)
+      kept.push_back(d);
+    db.add(d);
+  }
+  db.shrinkToFit();
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(db.data()) % (size_t(2) << 20), 0u);
+  ASSERT_EQ(db.size(), frames + 10);
+  size_t k = 0;
+  for (size_t i = 0; i < db.size(); ++i)
+    if (i % 100000 == 0 || i + 3 >= frames + 10)
+    {
+      const std::vector<uint64_t> stored(db.descriptor(i), db.descriptor(i) + 22);
+      ASSERT_EQ(stored, kept[k++]) << "frame " << i;
+    }
+}
+
 TEST(PlaceDatabase, CapacityEvictsOldestFirstInBatches)
 {
   PlaceDatabase db = filled(0, 64);
