@@ -165,7 +165,7 @@ struct PackedRows
   // Built for every block of rows a kernel is called on, so from the constants by one permutation a vector.
   __attribute__((target("avx512f,avx512bw"))) explicit PackedRows(const uint64_t* q)
   {
-    static const PackedLayout<W> layout;
+    static const PackedLayout<W> layout;  // the constants, built once per width
     const __m512i query = _mm512_maskz_loadu_epi64(static_cast<__mmask8>((1u << W) - 1u), q);
     for (size_t j = 0; j < W; ++j)
       pattern[j] = _mm512_permutexvar_epi64(_mm512_load_si512(layout.lanes[j]), query);
@@ -208,18 +208,30 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowA
 // The difference of two rows' distances with one reduction: per word, count_a + 64 - count_b lies in 0 .. 128
 // (a byte), so the bytes are subtracted before the horizontal sum and the bias 64 W after it.
 template <size_t W>
+struct PackedDifference
+{
+  PackedRows<W> a, b;
+
+  __attribute__((target("avx512f,avx512bw"))) PackedDifference(const uint64_t* qa, const uint64_t* qb) : a(qa), b(qb)
+  {
+  }
+  /// distance(qa, row at ra + k W) - distance(qb, row at rb + k W) for the eight rows k < 8.
+  __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) __m256i operator()(const uint64_t* ra,
+                                                                                           const uint64_t* rb) const
+  {
+    const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(ra), _mm512_set1_epi8(64)), b.counts(rb));
+    return _mm256_sub_epi32(a.sums(bytes), _mm256_set1_epi32(64 * W));
+  }
+};
+
+template <size_t W>
 __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowDifferenceAvx512Packed(
     const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b, size_t count, int32_t* out)
 {
-  const PackedRows<W> a(qa), b(qb);
-  const __m512i bias = _mm512_set1_epi8(64);
-  const __m256i total_bias = _mm256_set1_epi32(64 * W);
+  const PackedDifference<W> difference(qa, qb);
   size_t i = 0;
   for (; i + 8 <= count; i += 8)
-  {
-    const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(rows_a + i * W), bias), b.counts(rows_b + i * W));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), _mm256_sub_epi32(a.sums(bytes), total_bias));
-  }
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), difference(rows_a + i * W, rows_b + i * W));
   for (; i < count; ++i)
     out[i] = int32_t(pairAvx512Inline(qa, rows_a + i * W, W)) - int32_t(pairAvx512Inline(qb, rows_b + i * W, W));
 }
@@ -283,7 +295,7 @@ struct SumLanes<uint16_t>
 };
 
 // One step of the sequence sums (hammingChainStep) on packed small rows: the eight differences of
-// rowDifferenceAvx512Packed are added to the old sums one column to the left, in place. Column i's old sum is
+// PackedDifference are added to the old sums one column to the left, in place. Column i's old sum is
 // loaded before it is overwritten and the old sums of the eight columns before stay in a register, from which
 // valignd / palignr takes the one to the left: no copy of the sums and no array of differences in between.
 template <size_t W, typename Sum>
@@ -293,16 +305,13 @@ __attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) 
 {
   using Lanes = SumLanes<Sum>;
   using Vector = typename Lanes::Vector;
-  const PackedRows<W> a(qa), b(qb);
-  const __m512i bias = _mm512_set1_epi8(64);
-  const __m256i total_bias = _mm256_set1_epi32(64 * W);
+  const PackedDifference<W> difference(qa, qb);
   Vector old_before = Lanes::broadcast(carry);  // lane 7: the old sum left of column i
   Vector minimum = Lanes::broadcast(UINT32_MAX);
   size_t i = 0;
   for (; i + 8 <= count; i += 8)
   {
-    const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(rows_a + i * W), bias), b.counts(rows_b + i * W));
-    const Vector change = Lanes::narrow(_mm256_sub_epi32(a.sums(bytes), total_bias));
+    const Vector change = Lanes::narrow(difference(rows_a + i * W, rows_b + i * W));
     Vector old;
     std::memcpy(&old, sums + i, sizeof(Vector));  // one unaligned vector load
     const Vector updated = Lanes::add(Lanes::left(old, old_before), change);

@@ -78,7 +78,10 @@ void SequenceMatcher::Chains::assign(size_t columns, bool narrow)
 
 void SequenceMatcher::Chains::resize(size_t columns)
 {
-  (narrow_ ? narrow_sums_.resize(columns) : wide_sums_.resize(columns));
+  if (narrow_)
+    narrow_sums_.resize(columns);
+  else
+    wide_sums_.resize(columns);
   count.resize(columns);
 }
 
