@@ -170,10 +170,10 @@ private:
   std::vector<ChunkSummary> previous_summaries_;  ///< the frame before's, while match() runs
   std::vector<uint64_t> recent_;                  ///< ring of the last L + 1 query descriptors
   // Scratch for one chunk of columns.
-  std::vector<uint32_t> entering_;  ///< d(t, j)
-  std::vector<uint32_t> leaving_;   ///< d(t - L, j -/+ L)
-  std::vector<int32_t> change_;     ///< entering - leaving
-  std::vector<uint32_t> previous_sum_;    ///< the previous frame's chains of the columns each one continues
+  std::vector<uint32_t> entering_;      ///< d(t, j)
+  std::vector<uint32_t> leaving_;       ///< d(t - L, j -/+ L)
+  std::vector<int32_t> change_;         ///< entering - leaving
+  std::vector<uint32_t> previous_sum_;  ///< the previous frame's chains of the columns each one continues
   std::vector<uint16_t> previous_count_;
 };
 

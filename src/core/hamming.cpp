@@ -212,12 +212,10 @@ struct PackedDifference
 {
   PackedRows<W> a, b;
 
-  __attribute__((target("avx512f,avx512bw"))) PackedDifference(const uint64_t* qa, const uint64_t* qb) : a(qa), b(qb)
-  {
-  }
+  __attribute__((target("avx512f,avx512bw"))) PackedDifference(const uint64_t* qa, const uint64_t* qb) : a(qa), b(qb) {}
   /// distance(qa, row at ra + k W) - distance(qb, row at rb + k W) for the eight rows k < 8.
   __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) __m256i operator()(const uint64_t* ra,
-                                                                                           const uint64_t* rb) const
+                                                                                            const uint64_t* rb) const
   {
     const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(ra), _mm512_set1_epi8(64)), b.counts(rb));
     return _mm256_sub_epi32(a.sums(bytes), _mm256_set1_epi32(64 * W));
@@ -327,7 +325,8 @@ __attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) 
   for (; i < count; ++i)
   {
     const Sum old = sums[i];
-    sums[i] = static_cast<Sum>(before + pairAvx512Inline(qa, rows_a + i * W, W) - pairAvx512Inline(qb, rows_b + i * W, W));
+    sums[i] =
+        static_cast<Sum>(before + pairAvx512Inline(qa, rows_a + i * W, W) - pairAvx512Inline(qb, rows_b + i * W, W));
     smallest = std::min<uint32_t>(smallest, sums[i]);
     before = old;
   }
@@ -336,8 +335,8 @@ __attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) 
 
 bool hasVbmi()
 {
-  static const bool has = __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi") &&
-                          __builtin_cpu_supports("avx512vl");
+  static const bool has =
+      __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512vbmi") && __builtin_cpu_supports("avx512vl");
   return has;
 }
 
@@ -487,8 +486,8 @@ uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* rows_a, const uint6
 {
   if (words >= 1 && words <= 8 && stride == words && hasVbmi())
   {
-    using Packed = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, uint32_t,
-                                Sum*);
+    using Packed =
+        uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, uint32_t, Sum*);
     static const Packed packed[9] = {nullptr,
                                      chainStepAvx512Packed<1, Sum>,
                                      chainStepAvx512Packed<2, Sum>,
@@ -528,7 +527,8 @@ Kernel kernelFor(HammingKernel kernel)
       return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>, chainStepAvx512<uint16_t>};
 #endif
     default:
-      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowDifferenceOf<pairPortable>, uint32_t>,
+      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>,
+              chainStepOf<rowDifferenceOf<pairPortable>, uint32_t>,
               chainStepOf<rowDifferenceOf<pairPortable>, uint16_t>};
   }
 }

@@ -22,17 +22,25 @@ constexpr size_t kHugePage = size_t(2) << 20;
 /// block is rounded up to whole huge pages, so the threshold keeps that rounding below 6 %.
 constexpr size_t kHugePagesFrom = size_t(32) << 20;
 
+/// The alignment of a block holding `bytes` of descriptors, and the block's size (a multiple of it).
+size_t blockAlignment(size_t bytes)
+{
+  return bytes < kHugePagesFrom ? kAlignment : kHugePage;
+}
+size_t blockBytes(size_t bytes)
+{
+  const size_t alignment = blockAlignment(bytes);
+  return (bytes + alignment - 1) / alignment * alignment;
+}
+
 /// A block for `bytes` of descriptors, 64-byte aligned (a descriptor row starts a cache line when the stride
 /// is a multiple of 8 words); null when out of memory. Freed with std::free.
 uint64_t* allocateDescriptors(size_t bytes)
 {
-  if (bytes < kHugePagesFrom)
-    return static_cast<uint64_t*>(std::aligned_alloc(kAlignment, (bytes + kAlignment - 1) / kAlignment * kAlignment));
-  const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-  void* block = std::aligned_alloc(kHugePage, rounded);
+  void* block = std::aligned_alloc(blockAlignment(bytes), blockBytes(bytes));
 #ifdef MADV_HUGEPAGE
-  if (block)
-    madvise(block, rounded, MADV_HUGEPAGE);  // advice only: without huge pages the block works the same
+  if (block && blockAlignment(bytes) == kHugePage)
+    madvise(block, blockBytes(bytes), MADV_HUGEPAGE);  // advice only: without huge pages it works the same
 #endif
   return static_cast<uint64_t*>(block);
 }
@@ -186,8 +194,9 @@ void PlaceDatabase::evictOldest(size_t count)
 
 size_t PlaceDatabase::bytes() const
 {
-  return sizeof(uint64_t) * stride_ * allocated_ + sizeof(FrameRecord) * records_.capacity() +
-         sizeof(std::array<double, 7>) * poses_.capacity() + sources_.bytes();
+  return (allocated_ ? blockBytes(sizeof(uint64_t) * stride_ * allocated_) : 0) +
+         sizeof(FrameRecord) * records_.capacity() + sizeof(std::array<double, 7>) * poses_.capacity() +
+         sources_.bytes();
 }
 
 void PlaceDatabase::shrinkToFit()

@@ -131,7 +131,8 @@ TEST(Hamming, ChainStepEqualsNaiveShiftedSumsInPlace)
         uint32_t smallest = UINT32_MAX;
         for (size_t i = 0; i < count; ++i)
         {
-          expected[i] = (i == 0 ? carry : old_sums[i - 1]) + naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
+          expected[i] = (i == 0 ? carry : old_sums[i - 1]) +
+                        naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
                         naiveBitCount(qb.data(), rows_b.data() + i * stride, words);
           smallest = std::min(smallest, expected[i]);
         }
@@ -140,8 +141,8 @@ TEST(Hamming, ChainStepEqualsNaiveShiftedSumsInPlace)
           std::vector<uint32_t> sums(old_sums);
           const uint32_t minimum = hammingChainStep(k, qa.data(), rows_a.data(), qb.data(), rows_b.data(), stride,
                                                     words, count, carry, sums.data());
-          ASSERT_EQ(sums, expected) << kernelName(k) << " words=" << words << " stride=" << stride
-                                    << " count=" << count << " (the last entry must stay untouched)";
+          ASSERT_EQ(sums, expected) << kernelName(k) << " words=" << words << " stride=" << stride << " count=" << count
+                                    << " (the last entry must stay untouched)";
           ASSERT_EQ(minimum, smallest) << kernelName(k) << " words=" << words << " count=" << count;
           // 16-bit sums, where every sum fits (the old ones taken modulo 2^16 keep the new ones in range).
           if (words > 8)
@@ -156,9 +157,9 @@ TEST(Hamming, ChainStepEqualsNaiveShiftedSumsInPlace)
           }
           for (size_t i = 0; i < count; ++i)
           {
-            narrow_expected[i] = static_cast<uint16_t>(
-                (i == 0 ? carry : narrow[i - 1]) + naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
-                naiveBitCount(qb.data(), rows_b.data() + i * stride, words));
+            narrow_expected[i] = static_cast<uint16_t>((i == 0 ? carry : narrow[i - 1]) +
+                                                       naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
+                                                       naiveBitCount(qb.data(), rows_b.data() + i * stride, words));
             narrow_smallest = std::min(narrow_smallest, narrow_expected[i]);
           }
           const uint32_t narrow_minimum = hammingChainStep(k, qa.data(), rows_a.data(), qb.data(), rows_b.data(),
