@@ -217,7 +217,13 @@ struct PackedDifference
   __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) __m256i operator()(const uint64_t* ra,
                                                                                             const uint64_t* rb) const
   {
-    const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(a.counts(ra), _mm512_set1_epi8(64)), b.counts(rb));
+    return (*this)(a.counts(ra), rb);
+  }
+  /// The same with the first rows' bit counts already taken (a.counts).
+  __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) __m256i operator()(__m512i counts_a,
+                                                                                            const uint64_t* rb) const
+  {
+    const __m512i bytes = _mm512_sub_epi8(_mm512_add_epi8(counts_a, _mm512_set1_epi8(64)), b.counts(rb));
     return _mm256_sub_epi32(a.sums(bytes), _mm256_set1_epi32(64 * W));
   }
 };
@@ -306,10 +312,24 @@ __attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) 
   const PackedDifference<W> difference(qa, qb);
   Vector old_before = Lanes::broadcast(carry);  // lane 7: the old sum left of column i
   Vector minimum = Lanes::broadcast(UINT32_MAX);
-  size_t i = 0;
-  for (; i + 8 <= count; i += 8)
+  // Software-pipelined by kLag blocks of eight rows: block k's entering bit counts are taken as its rows arrive
+  // from memory, and its leaving counts and sums kLag blocks later. The leaving rows lie L rows behind; for a
+  // short sequence (L = 20: 960 bytes of HOG-B) they were often still on their way from memory, and loads
+  // waiting on them left fewer new rows in flight. Measured at N = 1e7: 10-18 % faster for L = 20 and 50.
+  constexpr size_t kLag = 4;
+  __m512i entering[kLag] = {};
+  const size_t blocks = count / 8;
+  for (size_t k = 0; k < blocks + kLag; ++k)
   {
-    const Vector change = Lanes::narrow(difference(rows_a + i * W, rows_b + i * W));
+    // Slot k mod kLag holds block k - kLag's counts until its chain step below, then block k's.
+    __m512i& slot = entering[k % kLag];
+    const __m512i lagging = slot;
+    if (k < blocks)
+      slot = difference.a.counts(rows_a + k * 8 * W);
+    if (k < kLag)
+      continue;
+    const size_t i = (k - kLag) * 8;
+    const Vector change = Lanes::narrow(difference(lagging, rows_b + i * W));
     Vector old;
     std::memcpy(&old, sums + i, sizeof(Vector));  // one unaligned vector load
     const Vector updated = Lanes::add(Lanes::left(old, old_before), change);
@@ -321,8 +341,8 @@ __attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) 
   std::memcpy(lanes, &minimum, sizeof(lanes));
   uint32_t smallest = *std::min_element(lanes, lanes + 8);
   std::memcpy(lanes, &old_before, sizeof(lanes));
-  Sum before = i > 0 ? lanes[7] : static_cast<Sum>(carry);
-  for (; i < count; ++i)
+  Sum before = lanes[7];  // the carry itself when there was no whole block
+  for (size_t i = blocks * 8; i < count; ++i)
   {
     const Sum old = sums[i];
     sums[i] =
