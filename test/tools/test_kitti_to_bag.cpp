@@ -23,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include "run_tool.h"
+
 namespace fs = std::filesystem;
 
 namespace
@@ -38,17 +40,8 @@ struct ToolRun
 
 ToolRun run(const std::string& arguments)
 {
-  ToolRun r;
-  const std::string command = std::string(KITTI_TO_BAG_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe)
-    return r;
-  char buffer[4096];
-  while (size_t n = fread(buffer, 1, sizeof(buffer), pipe))
-    r.output.append(buffer, n);
-  const int status = pclose(pipe);
-  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  const openable_test::Result r = openable_test::runTool(KITTI_TO_BAG_BINARY, arguments);
+  return ToolRun{r.exit_code, r.output};
 }
 
 std::vector<double> readTimes(const std::string& path)
