@@ -27,18 +27,19 @@ public:
   /// in one pass over both (hammingRowDifference for plain binary layouts).
   void rowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
                      size_t count, int32_t* out) const;
-  /// The steady-state step of sequence sums, in place (hammingChainStep for plain binary layouts): for i < count,
-  /// sums[i] = before(i) + distance(qa, rows_a[i]) - distance(qb, rows_b[i]), where before(0) = carry and
-  /// before(i) is the old sums[i - 1]. Returns the smallest new sum. 16-bit sums only where they fit.
-  uint32_t chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                     size_t count, uint32_t carry, uint32_t* sums) const;
-  uint32_t chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                     size_t count, uint32_t carry, uint16_t* sums) const;
+  /// The steady-state step of sequence sums, in place, each row read once (hammingChainStep for plain binary
+  /// layouts): for i < count, leaving[i + L] = distance(qb, row i) and sums[i] = before(i) + distance(qa, row i)
+  /// - leaving[i], where before(0) = carry and before(i) is the old sums[i - 1]. `leaving` holds count + L terms,
+  /// the first L the caller's. Returns the smallest new sum. 16-bit sums only where they fit.
+  uint32_t chainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t count, size_t L,
+                     uint32_t carry, uint32_t* sums, uint32_t* leaving) const;
+  uint32_t chainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t count, size_t L,
+                     uint32_t carry, uint16_t* sums, uint16_t* leaving) const;
 
 private:
   template <typename Sum>
-  uint32_t chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                       size_t count, uint32_t carry, Sum* sums) const;
+  uint32_t chainStepOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t count, size_t L,
+                       uint32_t carry, Sum* sums, Sum* leaving) const;
   uint32_t blockDistance(const uint64_t* a, const uint64_t* b) const;
   DescriptorLayout layout_;
 };

@@ -40,21 +40,25 @@ void hammingRowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint
 void hammingRowDifference(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
                           const uint64_t* rows_b, size_t stride, size_t words, size_t count, int32_t* out);
 
-/// One step of the sequence sums along diagonals (sequence_matcher.h), in place: for i < count,
-///   sums[i] = before(i) + hamming(qa, rows_a + i * stride, words) - hamming(qb, rows_b + i * stride, words)
-/// where before(0) = carry and before(i) is the old sums[i - 1]. Returns the smallest new sum (UINT32_MAX when
-/// count is 0). The caller ensures every new sum fits its type: the leaving term is part of the old sum, and
-/// 16-bit sums are for chains whose largest sum fits 16 bits (half the state read and written every frame).
-uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                          size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums);
-uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                          size_t stride, size_t words, size_t count, uint32_t carry, uint16_t* sums);
-uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
-                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
-                          uint32_t* sums);
-uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
-                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
-                          uint16_t* sums);
+/// One step of the sequence sums along diagonals (sequence_matcher.h), in place, reading each row once: for
+/// i < count, with row i = rows + i * stride,
+///   leaving[i + L] = hamming(qb, row i, words)       the term column i + L drops, L columns on
+///   sums[i]        = before(i) + hamming(qa, row i, words) - leaving[i]
+/// where before(0) = carry and before(i) is the old sums[i - 1]. `leaving` holds count + L terms: the caller
+/// gives the first L (hamming(qb, row i - L) for i < L), and the last L are the next step's first. Returns the
+/// smallest new sum (UINT32_MAX when count is 0). The caller ensures every new sum fits its type: the leaving
+/// term is part of the old sum, and 16-bit sums are for chains whose largest sum fits 16 bits (half the state
+/// read and written every frame).
+uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
+                          size_t count, size_t L, uint32_t carry, uint32_t* sums, uint32_t* leaving);
+uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
+                          size_t count, size_t L, uint32_t carry, uint16_t* sums, uint16_t* leaving);
+uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* qb, const uint64_t* rows,
+                          size_t stride, size_t words, size_t count, size_t L, uint32_t carry, uint32_t* sums,
+                          uint32_t* leaving);
+uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* qb, const uint64_t* rows,
+                          size_t stride, size_t words, size_t count, size_t L, uint32_t carry, uint16_t* sums,
+                          uint16_t* leaving);
 
 /// Euclidean distance between two float vectors.
 float l2Distance(const float* a, const float* b, size_t length);

@@ -128,6 +128,19 @@ private:
     {
       return narrow_ ? f(narrow_sums_.data()) : f(wide_sums_.data());
     }
+    /// f(pointer to the first sum, pointer to `terms` leaving terms of the sums' width): the scratch of
+    /// FrameMetric::chainStep, kept from one call to the next (its last L terms are the next call's first).
+    template <typename F>
+    auto withSumsAndLeaving(size_t terms, F f)
+    {
+      if (narrow_)
+      {
+        narrow_leaving_.resize(terms);
+        return f(narrow_sums_.data(), narrow_leaving_.data());
+      }
+      wide_leaving_.resize(terms);
+      return f(wide_sums_.data(), wide_leaving_.data());
+    }
 
     std::vector<uint16_t> count;
 
@@ -135,6 +148,8 @@ private:
     bool narrow_ = false;
     std::vector<uint16_t> narrow_sums_;
     std::vector<uint32_t> wide_sums_;
+    std::vector<uint16_t> narrow_leaving_;
+    std::vector<uint32_t> wide_leaving_;
   };
   /// One chunk of columns after match(): when `full`, every chain in it (both directions with bidirectional)
   /// holds L terms and `minimum` is the smallest of their sums.
@@ -169,6 +184,9 @@ private:
   std::vector<ChunkSummary> summaries_;           ///< per chunk of columns; empty when the chains changed since match()
   std::vector<ChunkSummary> previous_summaries_;  ///< the frame before's, while match() runs
   std::vector<uint64_t> recent_;                  ///< ring of the last L + 1 query descriptors
+  /// The forward chains' leaving terms d(t - L, j - L) of the L columns before this one are in forward_'s
+  /// scratch (withSumsAndLeaving), left there by the chunk before; none at the start of a frame.
+  size_t leaving_ready_at_ = SIZE_MAX;
   // Scratch for one chunk of columns.
   std::vector<uint32_t> entering_;      ///< d(t, j)
   std::vector<uint32_t> leaving_;       ///< d(t - L, j -/+ L)

@@ -99,34 +99,36 @@ void FrameMetric::rowDifference(const uint64_t* qa, const uint64_t* rows_a, cons
 }
 
 template <typename Sum>
-uint32_t FrameMetric::chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
-                                  const uint64_t* rows_b, size_t count, uint32_t carry, Sum* sums) const
+uint32_t FrameMetric::chainStepOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t count, size_t L,
+                                  uint32_t carry, Sum* sums, Sum* leaving) const
 {
   const size_t stride = layout_.frameWords();
   if (layout_.binary && layout_.blocks == 1)
-    return hammingChainStep(qa, rows_a, qb, rows_b, stride, stride, count, carry, sums);
+    return hammingChainStep(qa, qb, rows, stride, stride, count, L, carry, sums, leaving);
   uint32_t smallest = UINT32_MAX;
   Sum before = static_cast<Sum>(carry);
   for (size_t i = 0; i < count; ++i)
   {
+    const uint64_t* row = rows + i * stride;
+    leaving[i + L] = static_cast<Sum>(distance(qb, row));
     const Sum old = sums[i];
-    sums[i] = static_cast<Sum>(before + distance(qa, rows_a + i * stride) - distance(qb, rows_b + i * stride));
+    sums[i] = static_cast<Sum>(before + distance(qa, row) - leaving[i]);
     smallest = std::min<uint32_t>(smallest, sums[i]);
     before = old;
   }
   return smallest;
 }
 
-uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                                size_t count, uint32_t carry, uint32_t* sums) const
+uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t count, size_t L,
+                                uint32_t carry, uint32_t* sums, uint32_t* leaving) const
 {
-  return chainStepOf(qa, rows_a, qb, rows_b, count, carry, sums);
+  return chainStepOf(qa, qb, rows, count, L, carry, sums, leaving);
 }
 
-uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                                size_t count, uint32_t carry, uint16_t* sums) const
+uint32_t FrameMetric::chainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t count, size_t L,
+                                uint32_t carry, uint16_t* sums, uint16_t* leaving) const
 {
-  return chainStepOf(qa, rows_a, qb, rows_b, count, carry, sums);
+  return chainStepOf(qa, qb, rows, count, L, carry, sums, leaving);
 }
 
 }  // namespace openable

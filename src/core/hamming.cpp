@@ -185,10 +185,14 @@ struct PackedRows
   }
 
   /// The eight 64-bit sums of the bytes of each row (bytes as counts() lays them out).
+  __attribute__((target("avx512f,avx512bw,avx512vbmi"))) __m512i wordSums(__m512i bytes) const
+  {
+    return _mm512_sad_epu8(_mm512_maskz_permutexvar_epi8(keep, gather, bytes), _mm512_setzero_si512());
+  }
+  /// The same as 32-bit sums.
   __attribute__((target("avx512f,avx512bw,avx512vbmi"))) __m256i sums(__m512i bytes) const
   {
-    return _mm512_cvtepi64_epi32(
-        _mm512_sad_epu8(_mm512_maskz_permutexvar_epi8(keep, gather, bytes), _mm512_setzero_si512()));
+    return _mm512_cvtepi64_epi32(wordSums(bytes));
   }
 };
 
@@ -252,9 +256,10 @@ struct SumLanes<uint32_t>
   {
     return _mm256_set1_epi32(static_cast<int>(value));
   }
-  __attribute__((target("avx512f,avx512vl"))) static Vector narrow(__m256i change)
+  /// Eight 64-bit distances in the lanes' width.
+  __attribute__((target("avx512f,avx512vl"))) static Vector fromQwords(__m512i distances)
   {
-    return change;
+    return _mm512_cvtepi64_epi32(distances);
   }
   /// Lane 7 of `before`, then lanes 0 .. 6 of `old`: the old sums one column to the left.
   __attribute__((target("avx512f,avx512vl"))) static Vector left(Vector old, Vector before)
@@ -264,6 +269,11 @@ struct SumLanes<uint32_t>
   __attribute__((target("avx512f,avx512vl"))) static Vector add(Vector a, Vector b)
   {
     return _mm256_add_epi32(a, b);
+  }
+  /// Modulo 2^32: a sum minus its leaving term is exact when the result fits.
+  __attribute__((target("avx512f,avx512vl"))) static Vector sub(Vector a, Vector b)
+  {
+    return _mm256_sub_epi32(a, b);
   }
   __attribute__((target("avx512f,avx512vl"))) static Vector min(Vector a, Vector b)
   {
@@ -279,10 +289,10 @@ struct SumLanes<uint16_t>
   {
     return _mm_set1_epi16(static_cast<short>(value));
   }
-  /// The differences are at most +-64 W: their low 16 bits added modulo 2^16 give the exact sum, which fits.
-  __attribute__((target("avx512f,avx512vl"))) static Vector narrow(__m256i change)
+  /// Every distance fits where the sums do (sums of 16 bits are for chains whose largest sum fits them).
+  __attribute__((target("avx512f,avx512vl"))) static Vector fromQwords(__m512i distances)
   {
-    return _mm256_cvtepi32_epi16(change);
+    return _mm512_cvtepi64_epi16(distances);
   }
   __attribute__((target("avx512f,avx512vl"))) static Vector left(Vector old, Vector before)
   {
@@ -292,61 +302,59 @@ struct SumLanes<uint16_t>
   {
     return _mm_add_epi16(a, b);
   }
+  /// Modulo 2^16: a sum minus its leaving term is exact when the result fits.
+  __attribute__((target("avx512f,avx512vl"))) static Vector sub(Vector a, Vector b)
+  {
+    return _mm_sub_epi16(a, b);
+  }
   __attribute__((target("avx512f,avx512vl"))) static Vector min(Vector a, Vector b)
   {
     return _mm_min_epu16(a, b);
   }
 };
 
-// One step of the sequence sums (hammingChainStep) on packed small rows: the eight differences of
-// PackedDifference are added to the old sums one column to the left, in place. Column i's old sum is
-// loaded before it is overwritten and the old sums of the eight columns before stay in a register, from which
-// valignd / palignr takes the one to the left: no copy of the sums and no array of differences in between.
+// One step of the sequence sums (hammingChainStep) on packed small rows, in place. Each block of eight rows is
+// read once: its bit counts against the entering query qa go to the columns' new sums, those against the leaving
+// query qb to `leaving`, L columns on. The leaving term of a column is then a small array in L1 instead of a
+// second read of the rows L columns back: that second stream, 1-5 KB behind the first, cost 15-45 % at N = 1e7
+// (more the longer L) and now nothing. Column i's old sum is loaded before it is overwritten, and the old sums
+// of the eight columns before stay in a register, from which valignd / palignr takes the one to the left.
 template <size_t W, typename Sum>
 __attribute__((target("avx512f,avx512vl,avx512bw,avx512vbmi,avx512vpopcntdq"))) uint32_t chainStepAvx512Packed(
-    const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b, size_t count,
-    uint32_t carry, Sum* sums)
+    const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t count, size_t L, uint32_t carry, Sum* sums,
+    Sum* leaving)
 {
   using Lanes = SumLanes<Sum>;
   using Vector = typename Lanes::Vector;
-  const PackedDifference<W> difference(qa, qb);
+  const PackedRows<W> entering(qa), dropping(qb);
   Vector old_before = Lanes::broadcast(carry);  // lane 7: the old sum left of column i
   Vector minimum = Lanes::broadcast(UINT32_MAX);
-  // Software-pipelined by kLag blocks of eight rows: block k's entering bit counts are taken as its rows arrive
-  // from memory, and its leaving counts and sums kLag blocks later. The leaving rows lie L rows behind; for a
-  // short sequence (L = 20: 960 bytes of HOG-B) they were often still on their way from memory, and loads
-  // waiting on them left fewer new rows in flight. Measured at N = 1e7: 10-18 % faster for L = 20 and 50.
-  constexpr size_t kLag = 4;
-  __m512i entering[kLag] = {};
   const size_t blocks = count / 8;
-  for (size_t k = 0; k < blocks + kLag; ++k)
+  for (size_t i = 0; i < blocks * 8; i += 8)
   {
-    // Slot k mod kLag holds block k - kLag's counts until its chain step below, then block k's.
-    __m512i& slot = entering[k % kLag];
-    const __m512i lagging = slot;
-    if (k < blocks)
-      slot = difference.a.counts(rows_a + k * 8 * W);
-    if (k < kLag)
-      continue;
-    const size_t i = (k - kLag) * 8;
-    const Vector change = Lanes::narrow(difference(lagging, rows_b + i * W));
-    Vector old;
+    const uint64_t* block = rows + i * W;
+    const Vector entering_terms = Lanes::fromQwords(entering.wordSums(entering.counts(block)));
+    const Vector leaving_terms = Lanes::fromQwords(dropping.wordSums(dropping.counts(block)));
+    // Stored before the load below: for L < 8 some of this block's columns drop terms of this block's rows.
+    std::memcpy(leaving + i + L, &leaving_terms, sizeof(Vector));
+    Vector gone, old;
+    std::memcpy(&gone, leaving + i, sizeof(Vector));
     std::memcpy(&old, sums + i, sizeof(Vector));  // one unaligned vector load
-    const Vector updated = Lanes::add(Lanes::left(old, old_before), change);
+    const Vector updated = Lanes::add(Lanes::left(old, old_before), Lanes::sub(entering_terms, gone));
     std::memcpy(sums + i, &updated, sizeof(Vector));
     minimum = Lanes::min(minimum, updated);
     old_before = old;
   }
   Sum lanes[8];
   std::memcpy(lanes, &minimum, sizeof(lanes));
-  uint32_t smallest = *std::min_element(lanes, lanes + 8);
+  uint32_t smallest = blocks > 0 ? *std::min_element(lanes, lanes + 8) : UINT32_MAX;
   std::memcpy(lanes, &old_before, sizeof(lanes));
   Sum before = lanes[7];  // the carry itself when there was no whole block
   for (size_t i = blocks * 8; i < count; ++i)
   {
+    leaving[i + L] = static_cast<Sum>(pairAvx512Inline(qb, rows + i * W, W));
     const Sum old = sums[i];
-    sums[i] =
-        static_cast<Sum>(before + pairAvx512Inline(qa, rows_a + i * W, W) - pairAvx512Inline(qb, rows_b + i * W, W));
+    sums[i] = static_cast<Sum>(before + pairAvx512Inline(qa, rows + i * W, W) - leaving[i]);
     smallest = std::min<uint32_t>(smallest, sums[i]);
     before = old;
   }
@@ -472,26 +480,31 @@ void rowDifferenceOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t*
 }
 
 template <typename Sum>
-using ChainStepFn = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t,
-                                 size_t, uint32_t, Sum*);
+using ChainStepFn = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t, size_t, size_t,
+                                 uint32_t, Sum*, Sum*);
 
-/// A chain step through a kernel's row difference, a block of columns at a time.
-template <RowDifferenceFn difference, typename Sum>
-uint32_t chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                     size_t stride, size_t words, size_t count, uint32_t carry, Sum* sums)
+/// A chain step through a kernel's row function, a block of columns at a time (the block's rows stay in cache
+/// between the two rows of distances).
+template <RowFn row, typename Sum>
+uint32_t chainStepOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
+                     size_t count, size_t L, uint32_t carry, Sum* sums, Sum* leaving)
 {
   constexpr size_t kBlock = 64;
-  int32_t change[kBlock];
+  uint32_t distances[kBlock];
   uint32_t smallest = UINT32_MAX;
   Sum before = static_cast<Sum>(carry);
   for (size_t begin = 0; begin < count; begin += kBlock)
   {
     const size_t n = std::min(kBlock, count - begin);
-    difference(qa, rows_a + begin * stride, qb, rows_b + begin * stride, stride, words, n, change);
+    const uint64_t* block = rows + begin * stride;
+    // First the terms that leave L columns on: for L < n some leave within this block.
+    row(qb, block, stride, words, n, distances);
+    std::copy(distances, distances + n, leaving + begin + L);
+    row(qa, block, stride, words, n, distances);
     for (size_t i = 0; i < n; ++i)
     {
       const Sum old = sums[begin + i];
-      sums[begin + i] = static_cast<Sum>(before + change[i]);
+      sums[begin + i] = static_cast<Sum>(before + distances[i] - leaving[begin + i]);
       smallest = std::min<uint32_t>(smallest, sums[begin + i]);
       before = old;
     }
@@ -501,13 +514,13 @@ uint32_t chainStepOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t*
 
 #ifdef OPENABLE_X86
 template <typename Sum>
-uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                         size_t stride, size_t words, size_t count, uint32_t carry, Sum* sums)
+uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
+                         size_t count, size_t L, uint32_t carry, Sum* sums, Sum* leaving)
 {
   if (words >= 1 && words <= 8 && stride == words && hasVbmi())
   {
     using Packed =
-        uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, uint32_t, Sum*);
+        uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t, uint32_t, Sum*, Sum*);
     static const Packed packed[9] = {nullptr,
                                      chainStepAvx512Packed<1, Sum>,
                                      chainStepAvx512Packed<2, Sum>,
@@ -517,9 +530,9 @@ uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* rows_a, const uint6
                                      chainStepAvx512Packed<6, Sum>,
                                      chainStepAvx512Packed<7, Sum>,
                                      chainStepAvx512Packed<8, Sum>};
-    return packed[words](qa, rows_a, qb, rows_b, count, carry, sums);
+    return packed[words](qa, qb, rows, count, L, carry, sums, leaving);
   }
-  return chainStepOf<rowDifferenceAvx512, Sum>(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+  return chainStepOf<rowAvx512, Sum>(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
 }
 #endif
 
@@ -538,18 +551,17 @@ Kernel kernelFor(HammingKernel kernel)
   {
 #ifdef OPENABLE_X86
     case HammingKernel::kPopcnt:
-      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowDifferenceOf<pairPopcnt>, uint32_t>,
-              chainStepOf<rowDifferenceOf<pairPopcnt>, uint16_t>};
+      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowPopcnt, uint32_t>,
+              chainStepOf<rowPopcnt, uint16_t>};
     case HammingKernel::kAvx2:
-      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowDifferenceOf<pairAvx2>, uint32_t>,
-              chainStepOf<rowDifferenceOf<pairAvx2>, uint16_t>};
+      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowAvx2, uint32_t>,
+              chainStepOf<rowAvx2, uint16_t>};
     case HammingKernel::kAvx512Vpopcntdq:
       return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>, chainStepAvx512<uint16_t>};
 #endif
     default:
-      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>,
-              chainStepOf<rowDifferenceOf<pairPortable>, uint32_t>,
-              chainStepOf<rowDifferenceOf<pairPortable>, uint16_t>};
+      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowPortable, uint32_t>,
+              chainStepOf<rowPortable, uint16_t>};
   }
 }
 
@@ -637,30 +649,30 @@ void hammingRowDifference(HammingKernel kernel, const uint64_t* qa, const uint64
   checkedKernel(kernel).difference(qa, rows_a, qb, rows_b, stride, words, count, out);
 }
 
-uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                          size_t stride, size_t words, size_t count, uint32_t carry, uint32_t* sums)
+uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
+                          size_t count, size_t L, uint32_t carry, uint32_t* sums, uint32_t* leaving)
 {
-  return best().step(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+  return best().step(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
 }
 
-uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                          size_t stride, size_t words, size_t count, uint32_t carry, uint16_t* sums)
+uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
+                          size_t count, size_t L, uint32_t carry, uint16_t* sums, uint16_t* leaving)
 {
-  return best().step16(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+  return best().step16(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
 }
 
-uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
-                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
-                          uint32_t* sums)
+uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* qb, const uint64_t* rows,
+                          size_t stride, size_t words, size_t count, size_t L, uint32_t carry, uint32_t* sums,
+                          uint32_t* leaving)
 {
-  return checkedKernel(kernel).step(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+  return checkedKernel(kernel).step(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
 }
 
-uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
-                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, uint32_t carry,
-                          uint16_t* sums)
+uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* qb, const uint64_t* rows,
+                          size_t stride, size_t words, size_t count, size_t L, uint32_t carry, uint16_t* sums,
+                          uint16_t* leaving)
 {
-  return checkedKernel(kernel).step16(qa, rows_a, qb, rows_b, stride, words, count, carry, sums);
+  return checkedKernel(kernel).step16(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
 }
 
 float l2Distance(const float* a, const float* b, size_t length)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include "openable/error.h"
 
@@ -191,7 +192,8 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
   summaries_.assign((columns + kChunk - 1) / kChunk, ChunkSummary());
   const auto wasFull = [&](size_t chunk)
   { return chunk < previous_summaries_.size() && previous_summaries_[chunk].full; };
-  Carry carry;  // column -1 has no chain
+  Carry carry;                   // column -1 has no chain
+  leaving_ready_at_ = SIZE_MAX;  // a new query leaves: its terms are not computed yet
   for (size_t begin = 0; begin < columns; begin += kChunk)
   {
     const size_t end = std::min(columns, begin + kChunk);
@@ -242,15 +244,25 @@ void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begi
   // The steady state: every chain of the previous frame's columns begin - 1 .. end - 2 was full, so every new
   // one is. One fused pass adds the entering and drops the leaving terms in place; the counts stay L (only the
   // last column's is new: the others already held L).
+  // Each descriptor is read once: its distance to the query L frames ago is kept for the column L on, and
+  // chunk after chunk those terms carry over (only a frame's first steady chunk computes its L first ones).
   if (can_drop && begin >= L && before.count == L &&
       (was_full || allEqual(count + begin, n - 1, static_cast<uint16_t>(L))))
   {
-    summary.minimum = forward_.withSums(
-        [&](auto* sums)
+    summary.minimum = forward_.withSumsAndLeaving(
+        kChunk + L,
+        [&](auto* sums, auto* leaving)
         {
-          return metric_.chainStep(query, reference.descriptor(begin), leaving_query, reference.descriptor(begin - L),
-                                   n, before.sum, sums + begin);
+          using Term = std::remove_pointer_t<decltype(leaving)>;
+          if (leaving_ready_at_ != begin)
+            for (size_t i = 0; i < L; ++i)
+              leaving[i] = static_cast<Term>(metric_.distance(leaving_query, reference.descriptor(begin - L + i)));
+          const uint32_t minimum = metric_.chainStep(query, leaving_query, reference.descriptor(begin), n, L,
+                                                     before.sum, sums + begin, leaving);
+          std::memmove(leaving, leaving + n, L * sizeof(Term));
+          return minimum;
         });
+    leaving_ready_at_ = end;
     summary.full = true;
     count[end - 1] = static_cast<uint16_t>(L);
     return;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+#include <type_traits>
 
 #include "openable/error.h"
 #include "openable/hamming.h"
@@ -110,67 +112,69 @@ TEST(Hamming, RowDifferenceEqualsDifferenceOfNaiveDistances)
 }
 
 // The in-place chain step (the steady state of the sequence sums) against a naive copy: each sum takes the
-// old sum of the column before (the carry for the first) plus the entering minus the leaving distance.
+// old sum of the column before (the carry for the first) plus its row's distance to qa minus the term row i - L
+// left for it (the caller's first L terms, then the step's own), and every row leaves its distance to qb L on.
 TEST(Hamming, ChainStepEqualsNaiveShiftedSumsInPlace)
 {
   std::mt19937_64 rng(23);
   for (size_t words : {1u, 5u, 6u, 8u, 9u, 22u})
     for (size_t stride : {words, words + 3})
       for (size_t count : {0u, 1u, 7u, 8u, 9u, 17u, 300u})
-      {
-        const auto qa = randomWords(rng, words);
-        const auto qb = randomWords(rng, words);
-        const auto rows_a = randomWords(rng, stride * count + 1);
-        const auto rows_b = randomWords(rng, stride * count + 1);
-        // Old sums large enough that no new one goes negative, as in a full chain.
-        std::vector<uint32_t> old_sums(count + 1);
-        for (auto& s : old_sums)
-          s = 64 * uint32_t(words) + uint32_t(rng() % 100000);
-        const uint32_t carry = 64 * uint32_t(words) + 7;
-        std::vector<uint32_t> expected(old_sums);
-        uint32_t smallest = UINT32_MAX;
-        for (size_t i = 0; i < count; ++i)
+        for (size_t L : {1u, 3u, 8u, 20u})
         {
-          expected[i] = (i == 0 ? carry : old_sums[i - 1]) +
-                        naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
-                        naiveBitCount(qb.data(), rows_b.data() + i * stride, words);
-          smallest = std::min(smallest, expected[i]);
-        }
-        for (HammingKernel k : supportedKernels())
-        {
-          std::vector<uint32_t> sums(old_sums);
-          const uint32_t minimum = hammingChainStep(k, qa.data(), rows_a.data(), qb.data(), rows_b.data(), stride,
-                                                    words, count, carry, sums.data());
-          ASSERT_EQ(sums, expected) << kernelName(k) << " words=" << words << " stride=" << stride << " count=" << count
-                                    << " (the last entry must stay untouched)";
-          ASSERT_EQ(minimum, smallest) << kernelName(k) << " words=" << words << " count=" << count;
-          // 16-bit sums, where every sum fits (the old ones taken modulo 2^16 keep the new ones in range).
-          if (words > 8)
-            continue;
-          std::vector<uint16_t> narrow(old_sums.size());
-          uint16_t narrow_smallest = UINT16_MAX;
-          std::vector<uint16_t> narrow_expected(old_sums.size());
-          for (size_t i = 0; i < old_sums.size(); ++i)
-          {
-            narrow[i] = static_cast<uint16_t>(64 * words + old_sums[i] % 60000);
-            narrow_expected[i] = narrow[i];
-          }
+          const auto qa = randomWords(rng, words);
+          const auto qb = randomWords(rng, words);
+          const auto rows = randomWords(rng, stride * count + 1);
+          std::vector<uint32_t> expected_leaving(count + L);
+          for (size_t i = 0; i < L; ++i)
+            expected_leaving[i] = uint32_t(rng() % (64 * words + 1));  // the caller's: any distance
           for (size_t i = 0; i < count; ++i)
+            expected_leaving[i + L] = naiveBitCount(qb.data(), rows.data() + i * stride, words);
+          // Old sums large enough that no new one goes negative, as in a full chain.
+          std::vector<uint32_t> old_sums(count + 1);
+          for (auto& s : old_sums)
+            s = 64 * uint32_t(words) + uint32_t(rng() % 50000);
+          const uint32_t carry = 64 * uint32_t(words) + 7;
+          const auto naiveStep = [&](const auto& old)
           {
-            narrow_expected[i] = static_cast<uint16_t>((i == 0 ? carry : narrow[i - 1]) +
-                                                       naiveBitCount(qa.data(), rows_a.data() + i * stride, words) -
-                                                       naiveBitCount(qb.data(), rows_b.data() + i * stride, words));
-            narrow_smallest = std::min(narrow_smallest, narrow_expected[i]);
-          }
-          const uint32_t narrow_minimum = hammingChainStep(k, qa.data(), rows_a.data(), qb.data(), rows_b.data(),
-                                                           stride, words, count, carry, narrow.data());
-          ASSERT_EQ(narrow, narrow_expected) << kernelName(k) << " 16-bit, words=" << words << " count=" << count;
-          if (count > 0)
+            auto expected = old;
+            for (size_t i = 0; i < count; ++i)
+              expected[i] = static_cast<typename std::decay_t<decltype(old)>::value_type>(
+                  (i == 0 ? carry : old[i - 1]) + naiveBitCount(qa.data(), rows.data() + i * stride, words) -
+                  expected_leaving[i]);
+            return expected;
+          };
+          const auto smallestOf = [count](const auto& sums)
+          { return count == 0 ? UINT32_MAX : uint32_t(*std::min_element(sums.begin(), sums.begin() + count)); };
+          const std::vector<uint32_t> expected = naiveStep(old_sums);
+          for (HammingKernel k : supportedKernels())
           {
-            ASSERT_EQ(narrow_minimum, narrow_smallest) << kernelName(k) << " 16-bit, words=" << words;
+            const std::string what = kernelName(k) + " words=" + std::to_string(words) +
+                                     " stride=" + std::to_string(stride) + " count=" + std::to_string(count) +
+                                     " L=" + std::to_string(L);
+            std::vector<uint32_t> sums(old_sums);
+            std::vector<uint32_t> leaving(expected_leaving.begin(), expected_leaving.begin() + L);
+            leaving.resize(count + L, 12345);
+            const uint32_t minimum = hammingChainStep(k, qa.data(), qb.data(), rows.data(), stride, words, count, L,
+                                                      carry, sums.data(), leaving.data());
+            ASSERT_EQ(sums, expected) << what << " (the last entry must stay untouched)";
+            ASSERT_EQ(leaving, expected_leaving) << what;
+            ASSERT_EQ(minimum, smallestOf(expected)) << what;
+            // 16-bit sums and terms, where every sum fits.
+            if (words > 8)
+              continue;
+            std::vector<uint16_t> narrow(old_sums.begin(), old_sums.end());
+            const std::vector<uint16_t> narrow_expected = naiveStep(narrow);
+            std::vector<uint16_t> narrow_leaving(expected_leaving.begin(), expected_leaving.begin() + L);
+            narrow_leaving.resize(count + L, 12345);
+            const uint32_t narrow_minimum = hammingChainStep(k, qa.data(), qb.data(), rows.data(), stride, words, count,
+                                                             L, carry, narrow.data(), narrow_leaving.data());
+            ASSERT_EQ(narrow, narrow_expected) << what << " 16-bit";
+            ASSERT_EQ(std::vector<uint32_t>(narrow_leaving.begin(), narrow_leaving.end()), expected_leaving)
+                << what << " 16-bit";
+            ASSERT_EQ(narrow_minimum, smallestOf(narrow_expected)) << what << " 16-bit";
           }
         }
-      }
 }
 
 TEST(Hamming, BestKernelIsTheLastSupportedAndPortableAlwaysExists)
