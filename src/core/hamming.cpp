@@ -410,6 +410,49 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t
     out[i] = static_cast<uint32_t>(_mm512_reduce_add_epi64(total));
   }
 }
+// Both distances of every row from one read of it (the chain step's entering and leaving terms): up to three
+// vectors (LDB: 22 words), both queries in registers, and one horizontal sum for the two, the second's
+// per-lane counts (at most 192) added 32 bits up.
+__attribute__((target("avx512f,avx512vpopcntdq"))) void rowPairAvx512(const uint64_t* qa, const uint64_t* qb,
+                                                                      const uint64_t* rows, size_t stride, size_t words,
+                                                                      size_t count, uint32_t* out_a, uint32_t* out_b)
+{
+  if (words > 24)
+  {
+    for (size_t i = 0; i < count; ++i)
+    {
+      out_a[i] = pairAvx512Inline(qa, rows + i * stride, words);
+      out_b[i] = pairAvx512Inline(qb, rows + i * stride, words);
+    }
+    return;
+  }
+  const auto maskFor = [words](size_t first) -> __mmask8 {
+    return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
+  };
+  const __mmask8 mask[3] = {maskFor(0), maskFor(8), maskFor(16)};
+  __m512i a[3], b[3];
+  for (size_t v = 0; v < 3; ++v)
+  {
+    a[v] = _mm512_maskz_loadu_epi64(mask[v], qa + 8 * v);
+    b[v] = _mm512_maskz_loadu_epi64(mask[v], qb + 8 * v);
+  }
+  for (size_t i = 0; i < count; ++i)
+  {
+    const uint64_t* r = rows + i * stride;
+    __m512i total_a = _mm512_setzero_si512(), total_b = _mm512_setzero_si512();
+    for (size_t v = 0; v < 3; ++v)
+    {
+      const __m512i row = _mm512_maskz_loadu_epi64(mask[v], r + 8 * v);
+      total_a = _mm512_add_epi64(total_a, _mm512_popcnt_epi64(_mm512_xor_si512(a[v], row)));
+      total_b = _mm512_add_epi64(total_b, _mm512_popcnt_epi64(_mm512_xor_si512(b[v], row)));
+    }
+    const uint64_t both =
+        static_cast<uint64_t>(_mm512_reduce_add_epi64(_mm512_add_epi64(total_a, _mm512_slli_epi64(total_b, 32))));
+    out_a[i] = static_cast<uint32_t>(both);
+    out_b[i] = static_cast<uint32_t>(both >> 32);
+  }
+}
+
 __attribute__((target("avx512f,avx512vpopcntdq"))) void rowDifferenceAvx512(const uint64_t* qa, const uint64_t* rows_a,
                                                                             const uint64_t* qb, const uint64_t* rows_b,
                                                                             size_t stride, size_t words, size_t count,
@@ -479,32 +522,42 @@ void rowDifferenceOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t*
     out[i] = int32_t(pair(qa, rows_a + i * stride, words)) - int32_t(pair(qb, rows_b + i * stride, words));
 }
 
+/// out_a[i] and out_b[i]: the distances of row i to qa and to qb (the chain step's entering and leaving terms).
+using RowPairFn = void (*)(const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t, size_t, uint32_t*,
+                           uint32_t*);
+
+/// Both rows of distances through a kernel's row function, one after the other (the rows stay in cache).
+template <RowFn row>
+void rowPairOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words, size_t count,
+               uint32_t* out_a, uint32_t* out_b)
+{
+  row(qa, rows, stride, words, count, out_a);
+  row(qb, rows, stride, words, count, out_b);
+}
+
 template <typename Sum>
 using ChainStepFn = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t, size_t, size_t,
                                  uint32_t, Sum*, Sum*);
 
-/// A chain step through a kernel's row function, a block of columns at a time (the block's rows stay in cache
-/// between the two rows of distances).
-template <RowFn row, typename Sum>
+/// A chain step through a kernel's row pair function, a block of columns at a time.
+template <RowPairFn row_pair, typename Sum>
 uint32_t chainStepOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
                      size_t count, size_t L, uint32_t carry, Sum* sums, Sum* leaving)
 {
   constexpr size_t kBlock = 64;
-  uint32_t distances[kBlock];
+  uint32_t entering[kBlock], dropped[kBlock];
   uint32_t smallest = UINT32_MAX;
   Sum before = static_cast<Sum>(carry);
   for (size_t begin = 0; begin < count; begin += kBlock)
   {
     const size_t n = std::min(kBlock, count - begin);
-    const uint64_t* block = rows + begin * stride;
-    // First the terms that leave L columns on: for L < n some leave within this block.
-    row(qb, block, stride, words, n, distances);
-    std::copy(distances, distances + n, leaving + begin + L);
-    row(qa, block, stride, words, n, distances);
+    row_pair(qa, qb, rows + begin * stride, stride, words, n, entering, dropped);
+    // Stored before the loop below reads: for L < n some terms leave within this block.
+    std::copy(dropped, dropped + n, leaving + begin + L);
     for (size_t i = 0; i < n; ++i)
     {
       const Sum old = sums[begin + i];
-      sums[begin + i] = static_cast<Sum>(before + distances[i] - leaving[begin + i]);
+      sums[begin + i] = static_cast<Sum>(before + entering[i] - leaving[begin + i]);
       smallest = std::min<uint32_t>(smallest, sums[begin + i]);
       before = old;
     }
@@ -532,7 +585,7 @@ uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* qb, const uint64_t*
                                      chainStepAvx512Packed<8, Sum>};
     return packed[words](qa, qb, rows, count, L, carry, sums, leaving);
   }
-  return chainStepOf<rowAvx512, Sum>(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
+  return chainStepOf<rowPairAvx512, Sum>(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
 }
 #endif
 
@@ -551,17 +604,17 @@ Kernel kernelFor(HammingKernel kernel)
   {
 #ifdef OPENABLE_X86
     case HammingKernel::kPopcnt:
-      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowPopcnt, uint32_t>,
-              chainStepOf<rowPopcnt, uint16_t>};
+      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowPairOf<rowPopcnt>, uint32_t>,
+              chainStepOf<rowPairOf<rowPopcnt>, uint16_t>};
     case HammingKernel::kAvx2:
-      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowAvx2, uint32_t>,
-              chainStepOf<rowAvx2, uint16_t>};
+      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowPairOf<rowAvx2>, uint32_t>,
+              chainStepOf<rowPairOf<rowAvx2>, uint16_t>};
     case HammingKernel::kAvx512Vpopcntdq:
       return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>, chainStepAvx512<uint16_t>};
 #endif
     default:
-      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowPortable, uint32_t>,
-              chainStepOf<rowPortable, uint16_t>};
+      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowPairOf<rowPortable>, uint32_t>,
+              chainStepOf<rowPairOf<rowPortable>, uint16_t>};
   }
 }
 
