@@ -368,6 +368,12 @@ bool hasVbmi()
   return has;
 }
 
+/// The lanes of the 8-word vector starting at word `first` that hold words of a `words`-word descriptor.
+inline __mmask8 wordMask(size_t words, size_t first)
+{
+  return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
+}
+
 __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t* q, const uint64_t* rows,
                                                                   size_t stride, size_t words, size_t count,
                                                                   uint32_t* out)
@@ -395,10 +401,7 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t
   }
   // Descriptors of up to three 512-bit vectors (LDB: 22 words): the query and the masks stay in registers
   // for the whole row instead of being reloaded for every stored frame.
-  const auto maskFor = [words](size_t first) -> __mmask8 {
-    return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
-  };
-  const __mmask8 m0 = maskFor(0), m1 = maskFor(8), m2 = maskFor(16);
+  const __mmask8 m0 = wordMask(words, 0), m1 = wordMask(words, 8), m2 = wordMask(words, 16);
   const __m512i q0 = _mm512_maskz_loadu_epi64(m0, q), q1 = _mm512_maskz_loadu_epi64(m1, q + 8),
                 q2 = _mm512_maskz_loadu_epi64(m2, q + 16);
   for (size_t i = 0; i < count; ++i)
@@ -426,10 +429,7 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowPairAvx512(const uint
     }
     return;
   }
-  const auto maskFor = [words](size_t first) -> __mmask8 {
-    return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
-  };
-  const __mmask8 mask[3] = {maskFor(0), maskFor(8), maskFor(16)};
+  const __mmask8 mask[3] = {wordMask(words, 0), wordMask(words, 8), wordMask(words, 16)};
   __m512i a[3], b[3];
   for (size_t v = 0; v < 3; ++v)
   {
@@ -482,10 +482,7 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowDifferenceAvx512(cons
   }
   // Up to three vectors (LDB: 22 words): both queries and the masks in registers, as in rowAvx512, and the
   // two bit counts subtracted per lane before the one horizontal sum.
-  const auto maskFor = [words](size_t first) -> __mmask8 {
-    return first >= words ? __mmask8(0) : words - first >= 8 ? __mmask8(0xff) : __mmask8((1u << (words - first)) - 1u);
-  };
-  const __mmask8 m0 = maskFor(0), m1 = maskFor(8), m2 = maskFor(16);
+  const __mmask8 m0 = wordMask(words, 0), m1 = wordMask(words, 8), m2 = wordMask(words, 16);
   const __m512i a0 = _mm512_maskz_loadu_epi64(m0, qa), a1 = _mm512_maskz_loadu_epi64(m1, qa + 8),
                 a2 = _mm512_maskz_loadu_epi64(m2, qa + 16);
   const __m512i b0 = _mm512_maskz_loadu_epi64(m0, qb), b1 = _mm512_maskz_loadu_epi64(m1, qb + 8),
