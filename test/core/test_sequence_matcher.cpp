@@ -211,19 +211,21 @@ TEST(SequenceMatcher, BoundedHistoryKeepsFullSequencesExact)
 // Hundreds of columns: the in-place update crosses chunk boundaries (256 columns), and the candidate range
 // shrinks and grows from frame to frame, so chains start, stop and restart inside and across chunks. Both
 // widths of sums: 16-bit while L times the largest frame distance fits (HOG-B's 6 words, 384 bits, and 22
-// words with L = 20: 28,160), 32-bit beyond (22 words, 1,408 bits, with L = 47: 66,176).
+// words with L = 20: 28,160), 32-bit beyond (22 words, 1,408 bits, with L = 47: 66,176). L = 300 is longer
+// than a chunk: the leaving terms a chunk hands to the next reach back past the chunk before.
 TEST(SequenceMatcher, ManyColumnsWithChangingCandidatesEqualBruteForce)
 {
   std::mt19937_64 rng(23);
-  for (const auto& [words, L] : std::vector<std::pair<int, int>>{{6, 1}, {6, 2}, {6, 20}, {22, 20}, {22, 47}})
+  for (const auto& [words, L] : std::vector<std::pair<int, int>>{{6, 1}, {6, 2}, {6, 20}, {6, 300}, {22, 20}, {22, 47}})
     for (bool bidirectional : {false, true})
     {
       const auto layout = binaryLayout(words);  // 6: HOG-B, the fused AVX-512 kernel; 22: LDB's size
       const FrameMetric metric(layout);
       PlaceDatabase map(layout);
-      std::vector<size_t> candidates_of;  // by query
+      const size_t places = L > 256 ? 1300 : 700;  // several steady chunks past the first L columns
+      std::vector<size_t> candidates_of;           // by query
       BruteForce bf{metric, {}, {}, [&candidates_of](long q, long r) { return size_t(r) < candidates_of[q]; }};
-      for (int i = 0; i < 700; ++i)
+      for (size_t i = 0; i < places; ++i)
       {
         // Few distinct descriptors: many equal sums.
         bf.reference.push_back(i % 5 == 0 && i > 0 ? bf.reference[i / 2] : openable_test::randomWords(rng, words));
@@ -232,10 +234,11 @@ TEST(SequenceMatcher, ManyColumnsWithChangingCandidatesEqualBruteForce)
       SequenceMatcher m(layout, L, bidirectional);
       for (long t = 0; t < L + 25; ++t)  // full chains for the last 25 frames at least
       {
-        // Mostly everything, sometimes a few columns fewer or far fewer (across a chunk boundary).
+        // Mostly everything, sometimes a few columns fewer or far fewer (across a chunk boundary; not for
+        // L = 300, whose chains would never be full again within the test).
         const size_t roll = rng() % 8;
-        candidates_of.push_back(roll == 0 ? 700 - rng() % 3 : roll == 1 ? 200 + rng() % 120 : 700);
-        bf.queries.push_back(t % 4 == 0 ? bf.reference[(t * 37) % 700] : openable_test::randomWords(rng, words));
+        candidates_of.push_back(roll == 0 ? places - rng() % 3 : roll == 1 && L <= 256 ? 200 + rng() % 120 : places);
+        bf.queries.push_back(t % 4 == 0 ? bf.reference[(t * 37) % places] : openable_test::randomWords(rng, words));
         m.match(bf.queries.back().data(), map, candidates_of.back());
         ASSERT_EQ(m.columns(), candidates_of.back());
         expectRowMatches(m, bf, t, L, bidirectional, 0);
