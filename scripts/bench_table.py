@@ -77,6 +77,21 @@ def config_table(cpu, counters):
             map_bytes = counters[f"BM_ConfigMatch/{name}"].get("map_bytes", 0)
             print(f"| {config} | {n:,} | {match / 1e3:,.2f} | {memory / 1e3:,.2f} | {match / memory:.2f}x | "
                   f"{map_bytes / 1e6:,.0f} MB |")
+    length_table(cpu)
+
+
+def length_table(cpu):
+    """gardens_point at N = 1e7 with other sequence lengths: a frame reads each descriptor once, whatever L."""
+    memory = cpu.get("BM_ConfigMemoryRead/gardens_point/10000000")
+    rows = [(length, cpu.get(f"BM_ConfigMatchLength/gardens_point/10000000/{length}")) for length in (10, 50, 100, 300)]
+    if memory is None or all(t is None for _, t in rows):
+        return
+    print()
+    print("| gardens_point, N = 1e7, L | match (ms/frame) | match / read |")
+    print("|---:|---:|---:|")
+    for length, match in rows:
+        if match is not None:
+            print(f"| {length} | {match / 1e3:,.2f} | {match / memory:.2f}x |")
 
 
 if __name__ == "__main__":

@@ -6,6 +6,9 @@
 //                                     against N stored places, and the choice of its top_k distinct candidates
 //                                     as LoopDetector makes it: the scan of the history every frame pays
 //   BM_ConfigMemoryRead/<config>/<N>  reading those N descriptors once (a sum over every word)
+//   BM_ConfigMatchLength/gardens_point/10000000/<L>
+//                                     BM_ConfigMatch with another sequence length: a frame reads each descriptor
+//                                     once, so its cost should not depend on L
 //
 // N = 1e5, 1e6, and 1e7 when a place takes at most 64 bytes (a 1e7-place map of HOG would be 13 GB).
 #include "config_benchmarks.h"
@@ -144,17 +147,19 @@ void configDescribe(benchmark::State& state, const std::string& name)
   state.counters["descriptor_bytes"] = double(sizeof(uint64_t) * describer.layout().frameWords());
 }
 
-void configMatch(benchmark::State& state, const std::string& name, size_t n)
+/// `sequence_length` 0: the config's own.
+void configMatch(benchmark::State& state, const std::string& name, size_t n, int sequence_length)
 {
   const openable::Config config = shipped(name);
+  const int L = sequence_length > 0 ? sequence_length : config.sequence_length;
   const openable::PlaceDatabase& db = database(name, n);
-  openable::SequenceMatcher matcher(db.layout(), config.sequence_length, config.bidirectional);
+  openable::SequenceMatcher matcher(db.layout(), L, config.bidirectional);
   std::mt19937_64 rng(99);
   std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));
   for (auto& q : queries)
     randomDescriptor(db.layout(), rng, q.data());
   // The steady state first: every chain full, so each frame both adds and drops a term.
-  for (int i = 0; i <= config.sequence_length; ++i)
+  for (int i = 0; i <= L; ++i)
     matcher.match(queries[i % queries.size()].data(), db, n);
   size_t i = 0;
   std::vector<size_t> candidates;
@@ -162,7 +167,7 @@ void configMatch(benchmark::State& state, const std::string& name, size_t n)
   for (auto _ : state)
   {
     matcher.match(queries[i++ % queries.size()].data(), db, n);
-    matcher.smallestDistinct(wanted, size_t(config.uniqueness_window), config.sequence_length, candidates);
+    matcher.smallestDistinct(wanted, size_t(config.uniqueness_window), L, candidates);
     benchmark::DoNotOptimize(candidates.data());
   }
   setBytes(state, db);
@@ -199,10 +204,16 @@ void registerConfigBenchmarks()
       if (n > 1000000 && frame_bytes > 64)
         continue;
       const std::string suffix = name + "/" + std::to_string(n);
-      benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n)
+      benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n, 0)
           ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
           ->Unit(benchmark::kMillisecond);
+      if (name != "gardens_point" || n != 10000000)
+        continue;
+      for (int L : {10, 50, 100, 300})  // 300: longer than a chunk of columns (256)
+        benchmark::RegisterBenchmark(("BM_ConfigMatchLength/" + suffix + "/" + std::to_string(L)).c_str(), configMatch,
+                                     name, n, L)
+            ->Unit(benchmark::kMillisecond);
     }
   }
 }
