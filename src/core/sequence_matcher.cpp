@@ -214,9 +214,9 @@ void SequenceMatcher::match(const uint64_t* query, const PlaceDatabase& referenc
 
 // S_t[j] = S_{t-1}[j - 1] + d(t, j) - d(t - L, j - L), in place: column j takes the old sum of j - 1, so the
 // old values of the chunk are copied aside first (one chunk, in cache) and the old value of the chunk's last
-// column is carried to the next chunk, whose first column needs it. Ascending: the descriptors L columns
-// back, read for the leaving term, were read one or two chunks ago and are still in cache, so the history is
-// streamed from memory once per frame.
+// column is carried to the next chunk, whose first column needs it. Ascending: in the steady state each
+// descriptor is read once (its leaving term is kept for the column L on, below); elsewhere the descriptors L
+// columns back, read for the leaving term, were read one or two chunks ago and are still in cache.
 void SequenceMatcher::advanceForward(const PlaceDatabase& reference, size_t begin, size_t end, bool was_full,
                                      Carry& carry, ChunkSummary& summary)
 {
