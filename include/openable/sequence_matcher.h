@@ -163,6 +163,8 @@ private:
     uint32_t sum = 0;
     uint16_t count = 0;
   };
+  /// True when L times the largest frame distance fits 16 bits: the chains keep 16-bit sums (see Chains).
+  bool narrowSums() const;
   const uint64_t* recentQuery(size_t age) const;
   float meanTerm(uint32_t sum, uint16_t count) const;
   /// `was_full`: the previous frame's summaries show that every chain this chunk continues was full.
@@ -175,7 +177,6 @@ private:
 
   FrameMetric metric_;
   int sequence_length_;
-  bool narrow_sums_ = false;  ///< see Chains
   bool bidirectional_;
   uint64_t queries_ = 0;
   uint64_t first_id_ = 0;

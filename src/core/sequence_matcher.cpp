@@ -119,9 +119,8 @@ void SequenceMatcher::setSequenceLength(int sequence_length)
   const size_t words = metric_.layout().frameWords();
   std::vector<uint64_t> recent(words * (sequence_length_ + 1), 0);
   recent_.swap(recent);
-  narrow_sums_ = uint64_t(sequence_length) * metric_.layout().maxFrameDistance() <= UINT16_MAX;
-  forward_.assign(forward_.size(), narrow_sums_);
-  reverse_.assign(reverse_.size(), narrow_sums_);
+  forward_.assign(forward_.size(), narrowSums());
+  reverse_.assign(reverse_.size(), narrowSums());
   summaries_.clear();
   // Chains restart: the ring no longer holds the frames that would leave them. Count queries from here.
   queries_ = 0;
@@ -131,7 +130,7 @@ void SequenceMatcher::setBidirectional(bool bidirectional)
 {
   if (bidirectional && !bidirectional_)
   {
-    reverse_.assign(forward_.size(), narrow_sums_);
+    reverse_.assign(forward_.size(), narrowSums());
   }
   bidirectional_ = bidirectional;
   summaries_.clear();
@@ -141,9 +140,14 @@ void SequenceMatcher::reset()
 {
   queries_ = 0;
   first_id_ = 0;
-  forward_.assign(0, narrow_sums_);
-  reverse_.assign(0, narrow_sums_);
+  forward_.assign(0, narrowSums());
+  reverse_.assign(0, narrowSums());
   summaries_.clear();
+}
+
+bool SequenceMatcher::narrowSums() const
+{
+  return uint64_t(sequence_length_) * metric_.layout().maxFrameDistance() <= UINT16_MAX;
 }
 
 const uint64_t* SequenceMatcher::recentQuery(size_t age) const
