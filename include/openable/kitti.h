@@ -30,6 +30,10 @@ struct KittiPoses
 };
 KittiPoses readKittiPoses(const std::string& path);
 
+/// The whitespace-separated words of one line of a text file (KITTI, TUM) as numbers, appended to `numbers`;
+/// false when a word is not a number. "nan" and "inf" are numbers here (so callers can name them).
+bool numbersOfLine(const std::string& line, std::vector<double>& numbers);
+
 /// Why a 3x4 pose cannot be one ("" when it can): non-finite numbers, or R not a rotation (rows not
 /// orthonormal, determinant not +1) to KITTI's 7 printed digits.
 std::string kittiPoseProblem(const KittiMatrix& pose);

@@ -122,15 +122,12 @@ KittiPoses readKittiPoses(const std::string& path)
   {
     if (blank(line))
       continue;
-    std::istringstream fields(line);
-    KittiMatrix p;
-    int read = 0;
-    while (read < 12 && fields >> p[size_t(read)])
-      ++read;
-    std::string rest;
-    if (read != 12 || (fields >> rest))
+    std::vector<double> numbers;
+    if (!numbersOfLine(line, numbers) || numbers.size() != 12)
       throw Error(at(path, number) + "line " + std::to_string(number) +
                   " is not a row-major 3x4 pose (12 numbers, [R|t])");
+    KittiMatrix p;
+    std::copy(numbers.begin(), numbers.end(), p.begin());
     const std::string problem = kittiPoseProblem(p);
     if (!problem.empty())
       throw Error(at(path, number) + "the pose " + problem);
@@ -140,6 +137,22 @@ KittiPoses readKittiPoses(const std::string& path)
   if (out.poses.empty())
     throw Error("KITTI poses: '" + path + "' holds no pose");
   return out;
+}
+
+// strtod, not istream >> double: the latter refuses "nan" and "inf", which would be misreported as a
+// malformed line instead of as a non-finite number.
+bool numbersOfLine(const std::string& line, std::vector<double>& numbers)
+{
+  std::istringstream words(line);
+  std::string word;
+  while (words >> word)
+  {
+    char* end = nullptr;
+    numbers.push_back(std::strtod(word.c_str(), &end));
+    if (end == word.c_str() || *end != '\0')
+      return false;
+  }
+  return true;
 }
 
 std::map<long, std::string> listKittiImages(const std::string& dir)

@@ -51,6 +51,11 @@ public:
   {
     return source_.size();
   }
+  /// A video's size() is its container's word, not a count of decodable frames.
+  bool isVideo() const
+  {
+    return source_.isVideo();
+  }
 
   /// The next frame's images into `input` (empty when unreadable); false at the end.
   bool next(openable::FrameInput& input, Timings& t)

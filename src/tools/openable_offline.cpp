@@ -3,6 +3,7 @@
 //   openable_offline --config FILE.yaml --reference PATH [--query PATH] --output DIR [--set key=value]...
 //                    [--reference-right PATH] [--query-right PATH] [--ground-truth-tolerance T]
 //                    [--camera-info FILE [--verify-optional]] [--map-in FILE] [--map-out FILE] [--session NAME]
+//                    [--poses FILE [--keyframe-distance M] [--keyframe-angle RAD]]
 //
 // With --reference only, the stream is matched against its own past (loop-closure mode); with --query,
 // every query frame is matched against the reference traversal (localisation mode). See --help.
@@ -28,6 +29,7 @@
 #include "openable/image_source.h"
 #include "openable/npy.h"
 #include "openable/online_detector.h"
+#include "openable/pose_file.h"
 #include "openable/progress.h"
 #include "openable/render.h"
 #include "openable/reference_map.h"
@@ -47,6 +49,7 @@ const char* kUsage =
     "                        [--ground-truth-tolerance T] [--quiet]\n"
     "                        [--camera-info FILE [--verify-optional]]\n"
     "                        [--map-in FILE] [--map-out FILE] [--session NAME]\n"
+    "                        [--poses FILE [--keyframe-distance M] [--keyframe-angle RAD]]\n"
     "\n"
     "PATH is a folder of images (in name order, numbers compared as numbers: image2 before image10) or a\n"
     "video file.\n"
@@ -69,6 +72,14 @@ const char* kUsage =
     "  --map-out FILE   : save the map (every session, the stream's included; in localisation mode the\n"
     "                     reference) after a successful run\n"
     "  --session NAME   : the stream's session name in the map (default: the stream's file or folder name)\n"
+    "  --poses FILE     : the camera's odometry, one pose per frame of the stream (--query in localisation\n"
+    "                     mode) in frame order: a KITTI pose file (12 numbers a line, row-major 3x4 [R|t]) or\n"
+    "                     a TUM trajectory (stamp tx ty tz qx qy qz qw, '#' comments; the stamps become the\n"
+    "                     frames' stamps). Frames are stored as keyframes, as a nodelet with ~fixed_frame and\n"
+    "                     ~keyframe_distance does; the others are not_keyframe in decisions.csv\n"
+    "  --keyframe-distance M : with --poses, metres the camera must move before a frame is stored (default 1;\n"
+    "                     0: every frame)\n"
+    "  --keyframe-angle RAD  : with --poses, or turn this many radians (default 0: turning alone never does)\n"
     "Writes into DIR: distance_matrix.npy, distance_matrix.png, distance_matrix_thresholded.png (with a\n"
     "threshold), loop_closures.csv (published loop closures, with query_session,match_session), decisions.csv\n"
     "(every frame), timings.json.\n";
@@ -83,6 +94,8 @@ struct Options
   std::string camera_info;  // non-empty: verify, as a nodelet with ~verify and this camera_info
   bool verify_optional = false;
   std::string map_in, map_out, session;
+  std::string poses;  // non-empty: keyframes from this trajectory, as a nodelet with ~fixed_frame
+  double keyframe_distance = -1.0, keyframe_angle = -1.0;  // < 0: not given (defaults 1 m and 0 with --poses)
 };
 
 openable::SessionInfo sessionNamed(const std::string& name)
@@ -98,6 +111,23 @@ std::string nameOfPath(const std::string& path)
     p = p.parent_path();
   const std::string name = p.filename().string();
   return name.empty() || name == "." || name == ".." ? "stream" : name;
+}
+
+/// A number of metres or radians from the command line, in [0, max]; `expected` says so in the error.
+double nonNegative(const std::string& option, const std::string& value, double max, const char* expected)
+{
+  size_t used = 0;
+  double v = -1.0;
+  try
+  {
+    v = std::stod(value, &used);
+  }
+  catch (const std::exception&)
+  {
+  }
+  if (used != value.size() || !std::isfinite(v) || v < 0.0 || v > max)
+    throw Error(option + ": '" + value + "' is not allowed; expected " + expected);
+  return v;
 }
 
 Options parseArguments(int argc, char** argv)
@@ -146,6 +176,12 @@ Options parseArguments(int argc, char** argv)
       o.map_out = value;
     else if (arg == "--session")
       o.session = value;
+    else if (arg == "--poses")
+      o.poses = value;
+    else if (arg == "--keyframe-distance")
+      o.keyframe_distance = nonNegative(arg, value, 1e6, "metres in [0, 1e6] (0: every frame)");
+    else if (arg == "--keyframe-angle")
+      o.keyframe_angle = nonNegative(arg, value, M_PI, "radians in [0, pi] (0: off)");
     else if (arg == "--ground-truth-tolerance")
     {
       size_t used = 0;
@@ -176,6 +212,14 @@ Options parseArguments(int argc, char** argv)
   if (!o.map_in.empty() && !o.query.empty())
     throw Error("--map-in continues a map with one stream; with --query the reference traversal is the map "
                 "(drop --query or --map-in)");
+  if (o.poses.empty() && (o.keyframe_distance >= 0.0 || o.keyframe_angle >= 0.0))
+    throw Error("--keyframe-distance / --keyframe-angle need --poses (the motion comes from the poses)");
+  if (!o.poses.empty())
+  {
+    // Unless told otherwise: a keyframe every metre travelled; turning on the spot makes none.
+    o.keyframe_distance = o.keyframe_distance < 0.0 ? 1.0 : o.keyframe_distance;
+    o.keyframe_angle = o.keyframe_angle < 0.0 ? 0.0 : o.keyframe_angle;
+  }
   if (o.session.empty())
     o.session = nameOfPath(o.reference);
   return o;
@@ -254,6 +298,22 @@ int run(const Options& options)
                 << (camera.stereo() && config.camera_type == "stereo" ? "stereo" : "mono")
                 << (online.verify_required ? ", required)\n" : ", optional)\n");
   }
+  // Odometry: the poses a nodelet would look up in ~fixed_frame, and its keyframe parameters.
+  openable::PoseFile odometry;
+  if (!options.poses.empty())
+  {
+    odometry = openable::readPoseFile(options.poses);
+    online.keyframe_distance = options.keyframe_distance;
+    online.keyframe_angle = options.keyframe_angle;
+    if (!options.quiet)
+    {
+      std::cerr << "poses: " << odometry.poses.size() << " from " << options.poses << " ("
+                << openable::toString(odometry.format) << "); a keyframe every " << online.keyframe_distance << " m";
+      if (online.keyframe_angle > 0.0)
+        std::cerr << " or turn of " << online.keyframe_angle << " rad";
+      std::cerr << "\n";
+    }
+  }
 
   // Localisation: describe the reference traversal into a map first. Loop closure: a new map, or a saved
   // one continued (--map-in), with the stream as its newest session.
@@ -311,6 +371,10 @@ int run(const Options& options)
   // The stream: every frame through the online pipeline, as a nodelet would see it.
   TraversalReader stream(localisation ? options.query : options.reference,
                          localisation ? options.query_right : options.reference_right, options.quiet);
+  const std::string& stream_path = localisation ? options.query : options.reference;
+  if (!options.poses.empty() && !stream.isVideo() && odometry.poses.size() < stream.size())
+    throw Error("--poses: '" + options.poses + "' holds " + std::to_string(odometry.poses.size()) + " poses but '" +
+                stream_path + "' has " + std::to_string(stream.size()) + " frames; expected one pose per frame");
   openable::Progress progress(localisation ? "openable_offline: query" : "openable_offline", stream.size(),
                               options.quiet);
   std::vector<std::vector<float>> rows;  // per stream file: distances by frame number (empty = not described)
@@ -325,6 +389,18 @@ int run(const Options& options)
   openable::FrameInput input;
   for (long file = 0; stream.next(input, timings); ++file)
   {
+    if (!options.poses.empty())
+    {
+      // A video's frames are counted only as they are decoded: the check above cannot see them all.
+      if (static_cast<size_t>(file) >= odometry.poses.size())
+        throw Error("--poses: '" + options.poses + "' holds " + std::to_string(odometry.poses.size()) +
+                    " poses but '" + stream_path + "' has at least " + std::to_string(file + 1) +
+                    " frames; expected one pose per frame");
+      input.has_pose = true;
+      input.pose = odometry.poses[static_cast<size_t>(file)];
+      if (!odometry.stamps.empty())
+        input.stamp = odometry.stamps[static_cast<size_t>(file)];
+    }
     rows.emplace_back();
     progress.update(rows.size());
     openable::FrameOutcome outcome;
@@ -363,7 +439,7 @@ int run(const Options& options)
   }
   progress.finish();
   if (timings.frames == 0)
-    throw Error("no frame of '" + (localisation ? options.query : options.reference) + "' could be described");
+    throw Error("no frame of '" + stream_path + "' could be described");
 
   // Frames are counted as decoded: the matrix is as wide as the reference really was.
   const long columns = localisation ? reference_files : first_column + static_cast<long>(rows.size());
