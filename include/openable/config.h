@@ -40,6 +40,12 @@ struct Config
   int uniqueness_window = 10;   ///< frames around the best match ignored when looking for the second best
   bool bidirectional = false;   ///< also match sequences driven in the opposite direction
   int max_history = 0;          ///< frames kept in the loop-closure history (0 = unbounded)
+  int max_pace = 1;             ///< places a revisit may advance per frame: 1 = the first pass's pace (diagonal
+                                ///< sums); > 1 = any pace from a stop to max_pace (PaceMatcher)
+  double pace_penalty = 3.0;    ///< PaceMatcher: cost of a change of pace, in standard deviations of a
+                                ///< sequence's distance under noise
+  double standstill_distance = 0.0;  ///< a frame this close (normalised) to the last stored one is the camera
+                                     ///< standing still: not stored, not matched (0 = off)
 
   // Loop-closure decision (OnlineDetector): what must hold, besides the gates above, before a loop is published.
   int min_candidates = 60;         ///< fewer full-sequence candidate places: "too early" (uniqueness needs rivals)

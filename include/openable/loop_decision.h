@@ -14,6 +14,7 @@ enum class FrameStatus
 {
   Published,           ///< a loop closure went out
   NotKeyframe,         ///< not stored: the camera has not moved enough since the last keyframe
+  Standstill,          ///< not stored: the image is the last stored one again (the camera stands still)
   TimeJump,            ///< not stored: its stamp is earlier than the previous frame's
   TooEarly,            ///< fewer than min_candidates full-sequence places to compare with
   Excluded,            ///< history exists, but every frame of it is inside the exclusion (frames or seconds)
@@ -25,7 +26,7 @@ enum class FrameStatus
 };
 
 /// The word used in outputs (loop_closures.csv, decisions.csv, LoopClosure.status): "published",
-/// "not_keyframe", "time_jump", "too_early", "excluded", "above_threshold", "not_unique", "inconsistent",
+/// "not_keyframe", "standstill", "time_jump", "too_early", "excluded", "above_threshold", "not_unique", "inconsistent",
 /// "failed_verification", "unverified".
 const char* toString(FrameStatus status);
 
@@ -58,6 +59,7 @@ public:
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
   bool advancesWithRun(const Detection& detection) const;
+  bool recentFramesFollowOneLine() const;
 
   Config config_;
   int run_ = 0;                   ///< consecutive frames (ending at the previous one) that passed and agree
@@ -65,6 +67,7 @@ private:
   uint64_t previous_match_ = 0;   ///< best match of the previous frame
   int previous_direction_ = 1;
   uint32_t previous_session_ = 0;
+  std::deque<uint64_t> recent_;  ///< the run's last consistent_frames matches
 };
 
 }  // namespace openable

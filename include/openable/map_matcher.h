@@ -1,10 +1,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "openable/config.h"
 #include "openable/session_map.h"
+#include "openable/row_matcher.h"
 #include "openable/sequence_matcher.h"
 
 namespace openable
@@ -77,7 +79,10 @@ private:
   Config config_;
   bool partial_sequences_;
   FrameMetric metric_;
-  std::vector<SequenceMatcher> matchers_;  ///< one per session of the map, in map order
+  /// A session's matcher: sequences at any pace (PaceMatcher), or at the first pass's pace (max_pace 1).
+  std::unique_ptr<RowMatcher> makeMatcher(const DescriptorLayout& layout) const;
+
+  std::vector<std::unique_ptr<RowMatcher>> matchers_;  ///< one per session of the map, in map order
   FrameDescriptor last_query_;
   /// One session's candidate column and its distance.
   struct Pick

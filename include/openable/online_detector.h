@@ -8,6 +8,7 @@
 
 #include "openable/config.h"
 #include "openable/frame_describer.h"
+#include "openable/frame_metric.h"
 #include "openable/geo_position.h"
 #include "openable/geometric_verifier.h"
 #include "openable/loop_decision.h"
@@ -146,6 +147,9 @@ public:
 private:
   std::vector<Patch> patches(const FrameInput& input) const;
   bool isKeyframe(const FrameInput& input);
+  /// The camera stands still: the frame is textured and its descriptor within standstill_distance of the last
+  /// stored frame's (a textureless frame, e.g. a tunnel, says nothing about motion and is matched as usual).
+  bool standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
   void verify(const FrameInput& input, FrameOutcome& outcome);
 
   Config config_;
@@ -153,6 +157,10 @@ private:
   FrameDescriber describer_;
   LoopDetector detector_;
   LoopDecision decision_;
+  FrameMetric metric_;
+  bool has_last_stored_ = false;
+  FrameDescriptor last_stored_;  ///< the last stored frame's descriptor (standstill)
+  FrameOutcome last_outcome_;    ///< and its outcome: a frame standing still repeats it
   std::unique_ptr<GeometricVerifier> verifier_;
   FeatureStore features_;
   double last_stamp_ = 0.0;

@@ -6,6 +6,7 @@
 
 #include "openable/frame_metric.h"
 #include "openable/place_database.h"
+#include "openable/row_matcher.h"
 
 namespace openable
 {
@@ -22,7 +23,7 @@ namespace openable
 ///   R_t[j] = R_{t-1}[j+1] + d(t, j) - d(t-L, j+L).
 /// Each cell also keeps its term count n, so partial sequences (at the start of a stream, or of a new
 /// chain) are compared by their mean term. A change of L restarts every chain.
-class SequenceMatcher
+class SequenceMatcher : public RowMatcher
 {
 public:
   SequenceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional);
@@ -36,21 +37,21 @@ public:
     return bidirectional_;
   }
   /// Restarts every sequence (the history of query frames is kept).
-  void setSequenceLength(int sequence_length);
-  void setBidirectional(bool bidirectional);
+  void setSequenceLength(int sequence_length) override;
+  void setBidirectional(bool bidirectional) override;
   /// Forgets every query frame and every sequence.
-  void reset();
+  void reset() override;
 
   /// Adds the next query frame and computes its row against reference positions [0, candidates).
   /// The reference may have grown or lost its oldest frames since the last call.
-  void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates);
+  void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates) override;
 
   /// The current row covers reference ids [firstId(), firstId() + columns()).
-  uint64_t firstId() const
+  uint64_t firstId() const override
   {
     return first_id_;
   }
-  size_t columns() const
+  size_t columns() const override
   {
     return forward_.size();
   }
@@ -81,7 +82,11 @@ public:
   /// 1 = every bit different. With bidirectional matching, the smaller of the two directions; `direction`
   /// (optional) receives +1 (same direction) or -1 (reverse).
   /// Sequences of fewer than `min_terms` frames are left out (NaN when neither direction has enough).
-  float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const;
+  float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const override;
+  uint16_t terms(size_t column, int direction) const override
+  {
+    return direction > 0 ? forwardCount(column) : reverseCount(column);
+  }
   /// normalized() for every column.
   void normalizedRow(std::vector<float>& out, std::vector<int8_t>* directions = nullptr, int min_terms = 1) const;
 
@@ -92,7 +97,7 @@ public:
   /// but runs of columns whose sequences are all full are summarised by their smallest sum while matching,
   /// so this reads the row's state only where a summary does not answer (the start of the stream, a chosen
   /// column's neighbourhood).
-  size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const;
+  size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
 
 private:
   /// The chains of one direction: a sum and a term count a column. The sums are 16-bit when every possible sum

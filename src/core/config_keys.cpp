@@ -139,6 +139,17 @@ const std::vector<KeyAccess>& table()
               &Config::uniqueness_window).range(0, 100000).live(),
       makeKey("bidirectional", "also match sequences travelled in the opposite direction", &Config::bidirectional).live(),
       makeKey("max_history", "frames kept in the loop-closure history (0 = unbounded)", &Config::max_history).range(0, 100000000),
+      makeKey("max_pace",
+              "places a revisit may advance per frame: 1 = the first pass's pace only (the paper's sequences); "
+              "more = any pace from a stop up to this",
+              &Config::max_pace).range(1, 64).live(),
+      makeKey("pace_penalty",
+              "cost of a change of pace, in standard deviations of a sequence's distance under noise (max_pace > 1)",
+              &Config::pace_penalty).range(0, 100).live(),
+      makeKey("standstill_distance",
+              "a frame closer than this (normalised distance) to the last stored frame is the camera standing still: "
+              "not stored, not matched, it repeats the last decision (0 = off)",
+              &Config::standstill_distance).range(0, 1).live(),
       makeKey("min_candidates",
               "loop-closure decision: fewer full-sequence candidate places than this is 'too early' (frames)",
               &Config::min_candidates).range(0, 100000000).live(),

@@ -1,5 +1,7 @@
 #include "openable/loop_decision.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 namespace openable
@@ -12,6 +14,8 @@ const char* toString(FrameStatus status)
       return "published";
     case FrameStatus::NotKeyframe:
       return "not_keyframe";
+    case FrameStatus::Standstill:
+      return "standstill";
     case FrameStatus::TimeJump:
       return "time_jump";
     case FrameStatus::TooEarly:
@@ -43,6 +47,7 @@ void LoopDecision::setConfig(const Config& config)
 void LoopDecision::reset()
 {
   run_ = 0;
+  recent_.clear();
 }
 
 float LoopDecision::score(const Detection& detection) const
@@ -74,16 +79,36 @@ bool LoopDecision::advancesWithRun(const Detection& detection) const
   // A run follows one route: a match in another session starts a new run.
   if (run_ == 0 || detection.best.direction != previous_direction_ || detection.best.session != previous_session_)
     return false;
-  // Same direction: the match moves one place forward per frame; reverse: one place back. Checked per
-  // step and over the whole run, so a match that stays put (a "hub" place every frame matches) never
-  // becomes consistent by small steps.
-  const auto offset = [&detection](uint64_t from, long frames)
+  // The match moves along the route (forward, or back for a reverse revisit) at a pace between 1 / max_pace
+  // and max_pace places per frame (the revisit may be slower or faster than the first pass; a stop of the
+  // camera adds no frame), within consistency_tolerance: per step and over the whole run, so a match that
+  // stays put (a "hub" place that every frame matches) never becomes consistent by small steps. At
+  // max_pace 1 this is one place per frame.
+  const double pace = std::max(1, config_.max_pace);
+  const double tolerance = config_.consistency_tolerance;
+  const auto advance = [&detection](uint64_t from)
+  { return detection.best.direction * (static_cast<double>(detection.best.id) - static_cast<double>(from)); };
+  const auto within = [&](double moved, double frames)
+  { return moved >= frames / pace - tolerance && moved <= frames * pace + tolerance; };
+  return within(advance(previous_match_), 1.0) && within(advance(run_start_match_), run_);
+}
+
+bool LoopDecision::recentFramesFollowOneLine() const
+{
+  // At another pace than the first pass's, the run must also be straight lately: its last consistent_frames
+  // matches lie within consistency_tolerance of the line through the first and last of them. A match that
+  // stalls (a sequence that kept the old pace after the robot sped up) or jumps about breaks the line.
+  const size_t n = recent_.size();
+  if (config_.max_pace <= 1 || n < 3)
+    return true;
+  const double first = static_cast<double>(recent_.front()), last = static_cast<double>(recent_.back());
+  for (size_t k = 1; k + 1 < n; ++k)
   {
-    return std::labs(static_cast<long>(detection.best.id) - static_cast<long>(from) -
-                     detection.best.direction * frames);
-  };
-  return offset(previous_match_, 1) <= config_.consistency_tolerance &&
-         offset(run_start_match_, run_) <= config_.consistency_tolerance;
+    const double expected = first + (last - first) * static_cast<double>(k) / static_cast<double>(n - 1);
+    if (std::fabs(static_cast<double>(recent_[k]) - expected) > config_.consistency_tolerance)
+      return false;
+  }
+  return true;
 }
 
 FrameStatus LoopDecision::decide(const Detection& detection)
@@ -104,11 +129,16 @@ FrameStatus LoopDecision::decide(const Detection& detection)
     {
       run_ = 1;
       run_start_match_ = detection.best.id;
+      recent_.clear();
     }
+    recent_.push_back(detection.best.id);
+    while (recent_.size() > static_cast<size_t>(config_.consistent_frames))
+      recent_.pop_front();
     previous_match_ = detection.best.id;
     previous_direction_ = detection.best.direction;
     previous_session_ = detection.best.session;
-    return run_ >= config_.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;
+    return run_ >= config_.consistent_frames && recentFramesFollowOneLine() ? FrameStatus::Published
+                                                                            : FrameStatus::Inconsistent;
   }
   reset();
   return status;

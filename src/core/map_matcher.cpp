@@ -4,12 +4,21 @@
 #include <cmath>
 
 #include "openable/error.h"
+#include "openable/pace_matcher.h"
 
 namespace openable
 {
 MapMatcher::MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences)
   : config_(config), partial_sequences_(partial_sequences), metric_(layout)
 {
+}
+
+std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layout) const
+{
+  if (config_.max_pace <= 1)
+    return std::make_unique<SequenceMatcher>(layout, config_.sequence_length, config_.bidirectional);
+  return std::make_unique<PaceMatcher>(layout, config_.sequence_length, config_.max_pace, config_.bidirectional,
+                                       static_cast<float>(config_.pace_penalty));
 }
 
 int MapMatcher::minTerms() const
@@ -46,16 +55,16 @@ size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, doubl
 
 Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_t column) const
 {
-  const SequenceMatcher& matcher = matchers_[session];
+  const RowMatcher& matcher = *matchers_[session];
   const PlaceDatabase& frames = map.frames(session);
   Candidate c;
   int direction = 1;
   c.distance = matcher.normalized(column, &direction, minTerms());
+  c.sequence_length = matcher.terms(column, direction);
   c.direction = static_cast<int8_t>(direction);
   c.session = session;
   c.id = matcher.firstId() + column;
   c.position = static_cast<size_t>(c.id - frames.firstId());
-  c.sequence_length = direction > 0 ? matcher.forwardCount(column) : matcher.reverseCount(column);
   if (frames.layout().blocks > 1)
   {
     int shift = 0;
@@ -72,7 +81,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
                 std::to_string(map.layout().frameWords()) + " words");
   last_query_ = query;
   while (matchers_.size() < map.sessionCount())
-    matchers_.emplace_back(map.layout(), config_.sequence_length, config_.bidirectional);
+    matchers_.push_back(makeMatcher(map.layout()));
 
   // Top-k distinct places: each session's own (its matcher answers from what it summarised while
   // matching: no pass over a row of N floats), then the best of them all. A uniqueness window never
@@ -89,7 +98,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     const PlaceDatabase& frames = map.frames(s);
     const size_t columns = candidateColumns(frames, own, stamp);
     own_excluded = own_excluded || (own && columns == 0 && !frames.empty());
-    SequenceMatcher& matcher = matchers_[s];
+    RowMatcher& matcher = *matchers_[s];
     matcher.match(query.data(), frames, columns);
     detection.candidates += matcher.smallestDistinct(wanted, window, minTerms(), taken_);
     for (size_t column : taken_)
@@ -134,7 +143,7 @@ void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
     out.resize(start + frames.size(), std::nanf(""));
     if (s >= matchers_.size())
       continue;
-    const SequenceMatcher& matcher = matchers_[s];
+    const RowMatcher& matcher = *matchers_[s];
     for (size_t c = 0; c < matcher.columns(); ++c)
     {
       const uint64_t id = matcher.firstId() + c;
@@ -149,20 +158,29 @@ void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
 
 void MapMatcher::setConfig(const Config& config)
 {
-  for (SequenceMatcher& matcher : matchers_)
+  const bool new_kind = (config.max_pace <= 1) != (config_.max_pace <= 1) || config.max_pace != config_.max_pace ||
+                        config.pace_penalty != config_.pace_penalty;
+  if (new_kind)
+  {
+    config_ = config;
+    for (auto& matcher : matchers_)
+      matcher = makeMatcher(metric_.layout());
+    return;
+  }
+  for (auto& matcher : matchers_)
   {
     if (config.sequence_length != config_.sequence_length)
-      matcher.setSequenceLength(config.sequence_length);
+      matcher->setSequenceLength(config.sequence_length);
     if (config.bidirectional != config_.bidirectional)
-      matcher.setBidirectional(config.bidirectional);
+      matcher->setBidirectional(config.bidirectional);
   }
   config_ = config;
 }
 
 void MapMatcher::reset()
 {
-  for (SequenceMatcher& matcher : matchers_)
-    matcher.reset();
+  for (auto& matcher : matchers_)
+    matcher->reset();
 }
 
 }  // namespace openable

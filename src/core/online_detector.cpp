@@ -62,6 +62,7 @@ OnlineDetector::OnlineDetector(const Config& config, const OnlineOptions& option
     describer_(config),
     detector_(config),
     decision_(config),
+    metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
   checkOptions(options);
@@ -73,6 +74,7 @@ OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map
     describer_(config),
     detector_(config, nonEmpty(std::move(reference_map))),
     decision_(config),
+    metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
   checkOptions(options);
@@ -85,6 +87,7 @@ OnlineDetector::OnlineDetector(const Config& config, SessionMap map, MapMode mod
     describer_(config),
     detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, std::move(session)),
     decision_(config),
+    metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
   checkOptions(options);
@@ -135,6 +138,29 @@ bool OnlineDetector::isKeyframe(const FrameInput& input)
   return moved;
 }
 
+bool OnlineDetector::standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const
+{
+  if (config_.standstill_distance <= 0.0 || !has_last_stored_ || last_stored_.size() != descriptor.size())
+    return false;
+  const double distance = static_cast<double>(metric_.distance(descriptor.data(), last_stored_.data())) /
+                          static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
+  if (distance > config_.standstill_distance)
+    return false;
+  // Grey levels (0..255) of spread below which a patch shows nothing: a black tunnel frame is the same
+  // descriptor at any speed. The illumination-invariant image has another scale: not tested there.
+  constexpr double kMinTextureStdDev = 2.0;
+  if (config_.illumination_invariance)
+    return true;
+  for (const Patch& cell : cells)
+  {
+    cv::Scalar mean, deviation;
+    cv::meanStdDev(cell.intensity, mean, deviation);
+    if (deviation[0] >= kMinTextureStdDev)
+      return true;
+  }
+  return false;
+}
+
 FrameOutcome OnlineDetector::process(const FrameInput& input)
 {
   FrameOutcome outcome;
@@ -162,6 +188,21 @@ FrameOutcome OnlineDetector::process(const FrameInput& input)
   outcome.times.describe_ms = millisecondsSince(start);
   if (input.stamp > 0.0)
     last_stamp_ = input.stamp;
+  if (standsStill(descriptor, cells))
+  {
+    // The same place as the last stored frame: it adds no place and no step to the sequences (a stop must
+    // neither grow the history nor become a "revisit" of itself), and it repeats that frame's loop closure.
+    FrameOutcome repeated = last_outcome_;
+    repeated.stored = false;
+    repeated.query.stamp = input.stamp;
+    repeated.query.source = input.source;
+    repeated.query.has_pose = input.has_pose;
+    repeated.query.pose = input.pose;
+    repeated.times = outcome.times;
+    if (!repeated.published())
+      repeated.status = FrameStatus::Standstill;
+    return repeated;
+  }
 
   start = std::chrono::steady_clock::now();
   outcome.detection = detector_.process(descriptor, outcome.query);
@@ -186,6 +227,9 @@ FrameOutcome OnlineDetector::process(const FrameInput& input)
   start = std::chrono::steady_clock::now();
   verify(input, outcome);
   outcome.times.verify_ms = millisecondsSince(start);
+  has_last_stored_ = true;
+  last_stored_ = descriptor;
+  last_outcome_ = outcome;
   return outcome;
 }
 
@@ -275,6 +319,7 @@ void OnlineDetector::reset()
   features_.clear();
   last_stamp_ = 0.0;
   has_keyframe_pose_ = false;
+  has_last_stored_ = false;
 }
 
 }  // namespace openable

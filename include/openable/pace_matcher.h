@@ -1,0 +1,102 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "openable/frame_metric.h"
+#include "openable/row_matcher.h"
+
+namespace openable
+{
+/// Sequence matching at any pace: the revisit may advance from 1 / max_pace to max_pace places of the
+/// reference per query frame, and change pace along the way (an online Viterbi over places and paces, after
+/// Hansen & Browning, ICRA 2014, in min-plus form, with SeqSLAM's straight trajectories as its states).
+///
+/// Each place j and pace v (a slope from the set slopes(max_pace): 1/3, 1/2, 2/3, 1, 3/2, 2, 3 for 3) keeps the
+/// cost of the best path of query frames ending in j at that pace, an exponentially weighted mean of frame
+/// distances along it with a memory of L frames (a = 1 - 1/L):
+///   C_t[j, v] = (1 - a) * d(t, j) + a * min(C_{t-1}[j - s, v], M_{t-1}[j - s] + pace_penalty),
+///   M_t[j] = min_v C_t[j, v]
+/// where s = floor((t + 1) v) - floor(t v) is the places that pace advances at frame t (a straight line, as
+/// SeqSLAM searches), d the normalised frame distance (0 = identical, 1 = every bit different), and M_t[j]
+/// the place's cost at its best pace: a path keeps its pace for free and changes it for `pace_penalty`, so a
+/// revisit that speeds up or slows down is followed, while a path cannot zig-zag through the row picking the
+/// smallest distance of every frame (which would make every place look alike). With `bidirectional`, the
+/// reverse (places visited backwards: j + s) is kept the same way. One pass over the descriptors per frame,
+/// whatever L and max_pace are, plus one over the costs (a float a place and pace).
+///
+/// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
+/// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
+class PaceMatcher : public RowMatcher
+{
+public:
+  /// Throws Error when sequence_length < 1 or max_pace < 1.
+  PaceMatcher(const DescriptorLayout& layout, int sequence_length, int max_pace, bool bidirectional,
+              float step_penalty);
+
+  void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates) override;
+  uint64_t firstId() const override
+  {
+    return first_id_;
+  }
+  size_t columns() const override
+  {
+    return columns_;
+  }
+  float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const override;
+  uint16_t terms(size_t column, int direction) const override;
+  size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
+  void setSequenceLength(int sequence_length) override;
+  void setBidirectional(bool bidirectional) override;
+  void reset() override;
+
+  int maxPace() const
+  {
+    return max_pace_;
+  }
+  /// The paces followed, as fractions (places, frames): slowest first, then the reverse ones with bidirectional.
+  const std::vector<std::pair<int, int>>& paces() const
+  {
+    return slopes_;
+  }
+  /// Query frames matched since the last reset.
+  uint64_t queries() const
+  {
+    return queries_;
+  }
+
+private:
+  /// Keeps the row aligned with the reference: drops evicted places, appends new ones at `prior`.
+  void align(const PlaceDatabase& reference, size_t candidates);
+  /// The smallest normalized() of chunk `chunk`, leaving out columns within `window` of a taken one.
+  float chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const;
+  float value(size_t column, int* direction) const;
+
+  FrameMetric metric_;
+  int sequence_length_;
+  int max_pace_;
+  bool bidirectional_;
+  float step_penalty_;
+  std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
+  float keep_ = 0.0f;  ///< a = 1 - 1/L, the weight of the path so far
+  float inverse_max_distance_ = 0.0f;
+  uint64_t queries_ = 0;
+  uint64_t evidence_ = 0;  ///< query frames that had places to match since the last reset
+  uint64_t first_id_ = 0;
+  float prior_ = 0.0f;
+  float spread_ = 0.0f;  ///< the previous row's standard deviation of frame distances  ///< the previous row's mean frame distance: the start of a place that joins the row
+  std::vector<float> costs_;  ///< C[j, v]: slopes_.size() costs a place, place after place
+  std::vector<float> best_;   ///< M[j]: the smallest of a place's costs
+  std::vector<int8_t> direction_;  ///< +1 / -1: which direction M[j] comes from
+  size_t columns_ = 0;
+  std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
+  // Scratch for one chunk of columns.
+  std::vector<uint32_t> raw_;        ///< integer frame distances
+  std::vector<float> distances_;     ///< the same, normalised
+  std::vector<float> old_costs_;  ///< the previous frame's C and M the chunk reads (up to max_pace places around it)
+  std::vector<float> old_best_;
+};
+
+}  // namespace openable
