@@ -44,6 +44,7 @@ struct Config
                                 ///< sums); > 1 = any pace from a stop to max_pace (PaceMatcher)
   double pace_penalty = 3.0;    ///< PaceMatcher: cost of a change of pace, in standard deviations of a
                                 ///< sequence's distance under noise
+  int pace_tolerance = 1;       ///< PaceMatcher: places a sequence may be off its line in each frame (0..2)
   double standstill_distance = 0.0;  ///< a frame this close (normalised) to the last stored one is the camera
                                      ///< standing still: not stored, not matched (0 = off)
 

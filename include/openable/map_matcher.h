@@ -21,6 +21,7 @@ struct Candidate
   int8_t direction = 1;          ///< +1 same direction, -1 reverse (bidirectional matching)
   int16_t shift = 0;             ///< circular shift of sub-panoramas that matched best (panoramic)
   uint16_t sequence_length = 0;  ///< terms in the sequence (L, or fewer at the start of a chain)
+  float pace = 1.0f;  ///< places of the reference per query frame along the sequence (1: the first pass's pace)
 };
 
 /// The outcome of one frame.

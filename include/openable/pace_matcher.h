@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <utility>
 #include <vector>
 
@@ -29,12 +30,19 @@ namespace openable
 ///
 /// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
 /// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
+/// How PaceMatcher follows a revisit (Config's max_pace, pace_penalty, pace_tolerance).
+struct PaceOptions
+{
+  int max_pace = 3;        ///< paces from 1 / max_pace to max_pace places per frame
+  float penalty = 3.0f;    ///< a change of pace, in standard deviations of a path's cost under noise
+  int tolerance = 1;       ///< places a path may be off its line in each frame (0 .. 2)
+};
+
 class PaceMatcher : public RowMatcher
 {
 public:
-  /// Throws Error when sequence_length < 1 or max_pace < 1.
-  PaceMatcher(const DescriptorLayout& layout, int sequence_length, int max_pace, bool bidirectional,
-              float step_penalty);
+  /// Throws Error when sequence_length < 1 or an option is out of range.
+  PaceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional, const PaceOptions& options);
 
   void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates) override;
   uint64_t firstId() const override
@@ -47,6 +55,11 @@ public:
   }
   float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const override;
   uint16_t terms(size_t column, int direction) const override;
+  float pace(size_t column) const override
+  {
+    const auto& slope = slopes_[pace_[column]];
+    return static_cast<float>(std::abs(slope.first)) / static_cast<float>(slope.second);
+  }
   size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
   void setSequenceLength(int sequence_length) override;
   void setBidirectional(bool bidirectional) override;
@@ -79,6 +92,7 @@ private:
   int max_pace_;
   bool bidirectional_;
   float step_penalty_;
+  int tolerance_;
   std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
   float keep_ = 0.0f;  ///< a = 1 - 1/L, the weight of the path so far
   float inverse_max_distance_ = 0.0f;
@@ -89,7 +103,8 @@ private:
   float spread_ = 0.0f;  ///< the previous row's standard deviation of frame distances  ///< the previous row's mean frame distance: the start of a place that joins the row
   std::vector<float> costs_;  ///< C[j, v]: slopes_.size() costs a place, place after place
   std::vector<float> best_;   ///< M[j]: the smallest of a place's costs
-  std::vector<int8_t> direction_;  ///< +1 / -1: which direction M[j] comes from
+  std::vector<uint8_t> pace_;  ///< the index in slopes_ of the pace M[j] comes from
+  uint8_t one_ = 0;            ///< the index of pace 1
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.

@@ -25,6 +25,12 @@ public:
   /// Normalised distance of the sequence ending in `column`: 0 = identical, 1 = every bit different; NaN when
   /// the column holds fewer than `min_terms` frames of evidence. `direction` (optional): +1 same, -1 reverse.
   virtual float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const = 0;
+  /// Places of the reference per query frame along the sequence ending in `column`.
+  virtual float pace(size_t column) const
+  {
+    (void)column;
+    return 1.0f;
+  }
   /// Frames of evidence behind the column's sequence in `direction` (at most the sequence length).
   virtual uint16_t terms(size_t column, int direction) const = 0;
   /// The best distinct places of the row: repeatedly the column with the smallest normalized() (the lowest

@@ -146,6 +146,9 @@ const std::vector<KeyAccess>& table()
       makeKey("pace_penalty",
               "cost of a change of pace, in standard deviations of a sequence's distance under noise (max_pace > 1)",
               &Config::pace_penalty).range(0, 100).live(),
+      makeKey("pace_tolerance",
+              "places a sequence may be off its line in each frame, for paces between the ones followed (max_pace > 1)",
+              &Config::pace_tolerance).range(0, 2).live(),
       makeKey("standstill_distance",
               "a frame closer than this (normalised distance) to the last stored frame is the camera standing still: "
               "not stored, not matched, it repeats the last decision (0 = off)",

@@ -17,8 +17,11 @@ std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layo
 {
   if (config_.max_pace <= 1)
     return std::make_unique<SequenceMatcher>(layout, config_.sequence_length, config_.bidirectional);
-  return std::make_unique<PaceMatcher>(layout, config_.sequence_length, config_.max_pace, config_.bidirectional,
-                                       static_cast<float>(config_.pace_penalty));
+  PaceOptions pace;
+  pace.max_pace = config_.max_pace;
+  pace.penalty = static_cast<float>(config_.pace_penalty);
+  pace.tolerance = config_.pace_tolerance;
+  return std::make_unique<PaceMatcher>(layout, config_.sequence_length, config_.bidirectional, pace);
 }
 
 int MapMatcher::minTerms() const
@@ -61,6 +64,7 @@ Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_
   int direction = 1;
   c.distance = matcher.normalized(column, &direction, minTerms());
   c.sequence_length = matcher.terms(column, direction);
+  c.pace = matcher.pace(column);
   c.direction = static_cast<int8_t>(direction);
   c.session = session;
   c.id = matcher.firstId() + column;
@@ -159,7 +163,8 @@ void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
 void MapMatcher::setConfig(const Config& config)
 {
   const bool new_kind = (config.max_pace <= 1) != (config_.max_pace <= 1) || config.max_pace != config_.max_pace ||
-                        config.pace_penalty != config_.pace_penalty;
+                        config.pace_penalty != config_.pace_penalty ||
+                        config.pace_tolerance != config_.pace_tolerance;
   if (new_kind)
   {
     config_ = config;

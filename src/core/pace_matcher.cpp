@@ -43,21 +43,24 @@ int stepAt(uint64_t t, int p, int q)
 }
 }  // namespace
 
-PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, int max_pace, bool bidirectional,
-                         float step_penalty)
+PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional,
+                         const PaceOptions& options)
   : metric_(layout),
     sequence_length_(1),
-    max_pace_(max_pace),
+    max_pace_(options.max_pace),
     bidirectional_(bidirectional),
-    step_penalty_(step_penalty),
+    step_penalty_(options.penalty),
+    tolerance_(options.tolerance),
     inverse_max_distance_(1.0f / static_cast<float>(std::max<uint64_t>(1, layout.maxFrameDistance())))
 {
-  if (max_pace < 1 || max_pace > 64)
-    throw Error("max_pace " + std::to_string(max_pace) + " is out of range; expected 1..64 places per frame");
-  if (!std::isfinite(step_penalty) || step_penalty < 0.0f)
+  if (max_pace_ < 1 || max_pace_ > 64)
+    throw Error("max_pace " + std::to_string(max_pace_) + " is out of range; expected 1..64 places per frame");
+  if (!std::isfinite(step_penalty_) || step_penalty_ < 0.0f)
     throw Error("pace_penalty must be finite and >= 0");
+  if (tolerance_ < 0 || tolerance_ > 2)
+    throw Error("pace_tolerance " + std::to_string(tolerance_) + " is out of range; expected 0..2 places");
   setSequenceLength(sequence_length);
-  raw_.resize(kChunk + 2);
+  raw_.resize(kChunk + 2 * static_cast<size_t>(tolerance_));
   distances_.resize(kChunk);
 }
 
@@ -86,6 +89,7 @@ void PaceMatcher::reset()
       slopes_.emplace_back(-slopes_[v].first, slopes_[v].second);
   }
   const size_t slopes = slopes_.size();
+  one_ = static_cast<uint8_t>(std::find(slopes_.begin(), slopes_.end(), std::make_pair(60, 60)) - slopes_.begin());
   const size_t reach = static_cast<size_t>(max_pace_);
   old_costs_.assign((kChunk + 2 * reach) * slopes, kNoPath);
   old_best_.assign(kChunk + 2 * reach, kNoPath);
@@ -94,7 +98,7 @@ void PaceMatcher::reset()
   columns_ = 0;
   costs_.clear();
   best_.clear();
-  direction_.clear();
+  pace_.clear();
   chunk_minimum_.clear();
 }
 
@@ -108,7 +112,7 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
     columns_ = 0;
     costs_.clear();
     best_.clear();
-    direction_.clear();
+    pace_.clear();
     first_id_ = reference.firstId();
   }
   if (reference.firstId() > first_id_)
@@ -116,7 +120,7 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
     const size_t gone = static_cast<size_t>(std::min<uint64_t>(reference.firstId() - first_id_, columns_));
     costs_.erase(costs_.begin(), costs_.begin() + static_cast<long>(gone * slopes));
     best_.erase(best_.begin(), best_.begin() + static_cast<long>(gone));
-    direction_.erase(direction_.begin(), direction_.begin() + static_cast<long>(gone));
+    pace_.erase(pace_.begin(), pace_.begin() + static_cast<long>(gone));
     columns_ -= gone;
     first_id_ = reference.firstId();
   }
@@ -124,7 +128,7 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
   columns_ = candidates;
   costs_.resize(candidates * slopes, prior_);
   best_.resize(candidates, prior_);
-  direction_.resize(candidates, 1);
+  pace_.resize(candidates, one_);
 }
 
 void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates)
@@ -163,9 +167,10 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   for (size_t begin = 0, chunk = 0; begin < n; begin += kChunk, ++chunk)
   {
     const size_t m = std::min(kChunk, n - begin);
-    // The chunk's distances and one place on each side (the row's ends repeat their own).
-    const size_t low = begin > 0 ? begin - 1 : 0;
-    const size_t high = std::min(n, begin + m + 1);
+    // The chunk's distances and `tolerance` places on each side.
+    const size_t tolerance = static_cast<size_t>(tolerance_);
+    const size_t low = begin > tolerance ? begin - tolerance : 0;
+    const size_t high = std::min(n, begin + m + tolerance);
     metric_.row(query, reference.descriptor(low), high - low, raw_.data());
     const uint32_t* own = raw_.data() + (begin - low);
     // The previous frame's costs of this chunk and of the `reach` places after it, not yet overwritten.
@@ -181,16 +186,23 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     float minimum = kNoPath;
     for (size_t i = 0; i < m; ++i)
     {
-      // A path may be off its place by one (a pace between two of the slopes): each frame counts the nearest
-      // of the place and its two neighbours.
-      const uint32_t previous = begin + i > 0 ? own[i - 1] : own[i];
-      const uint32_t next = begin + i + 1 < n ? own[i + 1] : own[i];
-      distance_sum += static_cast<float>(own[i]) * inverse_max_distance_;
-      square_sum += double(own[i]) * double(own[i]) * double(inverse_max_distance_) * double(inverse_max_distance_);
+      // A path may be off its line by `tolerance` places (a pace between two of the slopes): each frame counts
+      // the nearest of the place and its neighbours within it.
+      const size_t j = begin + i;
+      uint32_t nearest = own[i];
+      for (size_t k = 1; k <= tolerance; ++k)
+      {
+        if (j >= k)
+          nearest = std::min(nearest, own[static_cast<long>(i) - static_cast<long>(k)]);
+        if (j + k < n)
+          nearest = std::min(nearest, own[i + k]);
+      }
       const float exact = static_cast<float>(own[i]) * inverse_max_distance_;
-      const float d = static_cast<float>(std::min(own[i], std::min(previous, next))) * inverse_max_distance_;
+      distance_sum += exact;
+      square_sum += double(exact) * exact;
+      const float d = static_cast<float>(nearest) * inverse_max_distance_;
       float best = kNoPath;
-      int8_t direction = 1;
+      uint8_t pace = one_;
       float* costs = costs_.data() + (begin + i) * slopes;
       for (size_t v = 0; v < slopes; ++v)
       {
@@ -203,13 +215,13 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
         if (costs[v] < best)
         {
           best = costs[v];
-          direction = slopes_[v].first > 0 ? 1 : -1;
+          pace = static_cast<uint8_t>(v);
         }
       }
       // The place itself is judged by its own distance this frame: the tolerance is for the path behind it.
       best += fresh * (exact - d);
       best_[begin + i] = best;
-      direction_[begin + i] = direction;
+      pace_[begin + i] = pace;
       minimum = std::min(minimum, best);
     }
     chunk_minimum_[chunk] = minimum;
@@ -226,7 +238,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
 float PaceMatcher::value(size_t column, int* direction) const
 {
   if (direction)
-    *direction = direction_[column];
+    *direction = slopes_[pace_[column]].first > 0 ? 1 : -1;
   return best_[column];
 }
 

@@ -382,7 +382,7 @@ int run(const Options& options)
   std::ostringstream loops, decisions;
   loops << "query,match,distance,score,status" << (panoramic ? ",direction,shift" : "")
         << ",query_session,match_session\n";
-  decisions << "query,match,distance,score,status,accepted\n";
+  decisions << "query,match,distance,score,status,accepted,pace\n";
   std::map<std::string, size_t> status_counts;
   size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;
   std::vector<float> row;
@@ -421,7 +421,7 @@ int run(const Options& options)
     const long match = d.has_candidates ? numbers->stored(map, d.best.session, d.best.position, own) : -1;
     decisions << query << "," << match << "," << formatFloat(d.has_candidates ? d.best.distance : NAN) << ","
               << formatFloat(d.has_candidates ? outcome.score : NAN) << "," << openable::toString(outcome.status) << ","
-              << (outcome.published() ? 1 : 0) << "\n";
+              << (outcome.published() ? 1 : 0) << "," << formatFloat(d.has_candidates ? d.best.pace : NAN) << "\n";
     if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;

@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "openable/error.h"
 #include "openable/loop_decision.h"
 #include "openable/online_detector.h"
 #include "openable/pace_matcher.h"
@@ -64,17 +65,27 @@ public:
         const int p = paces_[v].first, q = paces_[v].second;
         const long step = long((t_ + 1) * std::abs(p) / q) - long(t_ * std::abs(p) / q);
         const long from = long(j) - (p > 0 ? step : -step);
-        const float change = keep > 0.0f ? penalty_ * (1.0f - keep) / keep : 0.0f;
+        // A change of pace costs `penalty_` standard deviations of a path's cost under noise.
+        const float change = keep > 0.0f ? penalty_ * spread_ * std::sqrt((1.0f - keep) / (1.0f + keep)) : 0.0f;
         const float path = std::min(oldCost(from, v), oldBest(from) + change);
         costs[j][v] = (1.0f - keep) * d[j] + keep * path;
         best[j] = std::min(best[j], costs[j][v]);
       }
+    for (size_t j = 0; j < n; ++j)
+      best[j] += (1.0f - keep) * (raw[j] - d[j]);
     costs_ = costs;
     best_ = best;
-    double sum = 0.0;
+    double sum = 0.0, squares = 0.0;
     for (float r : raw)
+    {
       sum += r;
-    prior_ = n ? float(sum / n) : prior_;
+      squares += double(r) * r;
+    }
+    if (n)
+    {
+      prior_ = float(sum / n);
+      spread_ = float(std::sqrt(std::max(0.0, squares / n - double(prior_) * prior_)));
+    }
     ++t_;
   }
   float best(size_t j) const
@@ -90,6 +101,7 @@ private:
   std::vector<std::vector<float>> costs_;
   std::vector<float> best_;
   float prior_ = 0.0f;
+  float spread_ = 0.0f;
   uint64_t t_ = 0;
 };
 
@@ -109,8 +121,8 @@ TEST(PaceMatcher, EqualsTheNaiveRecurrenceAcrossChunksGrowthAndBothDirections)
   {
     std::mt19937_64 rng(bidirectional ? 11 : 5);
     PlaceDatabase reference(layout);
-    PaceMatcher matcher(layout, 7, 3, bidirectional, 0.3f);
-    NaivePace naive(layout, 7, matcher.paces(), 0.3f);
+    PaceMatcher matcher(layout, 7, bidirectional, PaceOptions());
+    NaivePace naive(layout, 7, matcher.paces(), 3.0f);
     for (int t = 0; t < 40; ++t)
     {
       // The reference grows by 23 places a frame: rows cross the 256-column chunks, new places join each row.
@@ -130,7 +142,7 @@ TEST(PaceMatcher, EqualsTheNaiveRecurrenceAcrossChunksGrowthAndBothDirections)
 
 TEST(PaceMatcher, PacesSpanTheRangeWithOneExactly)
 {
-  PaceMatcher matcher(binaryLayout(64), 10, 3, false, 0.3f);
+  PaceMatcher matcher(binaryLayout(64), 10, false, PaceOptions());
   const auto& paces = matcher.paces();
   ASSERT_GE(paces.size(), 7u);
   EXPECT_EQ(paces.front().first * 3, paces.front().second);  // 1/3
@@ -152,7 +164,7 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
     places.push_back(randomDescriptor(rng, 4));
     reference.add(places.back(), FrameInfo());
   }
-  PaceMatcher matcher(layout, 10, 3, false, 0.3f);
+  PaceMatcher matcher(layout, 10, false, PaceOptions());
   for (int j = 20; j < 200; j += 2)
   {
     auto query = places[static_cast<size_t>(j)];
@@ -163,9 +175,16 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
     if (j >= 40)
       EXPECT_NEAR(static_cast<double>(best.at(0)), j, 1.0) << "revisit of place " << j;
   }
-  EXPECT_THROW(PaceMatcher(layout, 10, 0, false, 0.3f), Error);
-  EXPECT_THROW(PaceMatcher(layout, 0, 3, false, 0.3f), Error);
-  EXPECT_THROW(PaceMatcher(layout, 10, 3, false, std::nanf("")), Error);
+  PaceOptions bad;
+  bad.max_pace = 0;
+  EXPECT_THROW(PaceMatcher(layout, 10, false, bad), Error);
+  EXPECT_THROW(PaceMatcher(layout, 0, false, PaceOptions()), Error);
+  bad = PaceOptions();
+  bad.penalty = std::nanf("");
+  EXPECT_THROW(PaceMatcher(layout, 10, false, bad), Error);
+  bad = PaceOptions();
+  bad.tolerance = 3;
+  EXPECT_THROW(PaceMatcher(layout, 10, false, bad), Error);
 }
 
 namespace
