@@ -15,7 +15,7 @@ namespace openable
 /// reference per query frame, and change pace along the way (an online Viterbi over places and paces, after
 /// Hansen & Browning, ICRA 2014, in min-plus form, with SeqSLAM's straight trajectories as its states).
 ///
-/// Each place j and pace v (a slope from the set slopes(max_pace): 1/3, 1/2, 2/3, 1, 3/2, 2, 3 for 3) keeps the
+/// Each place j and pace v (17 slopes from 1/3 to 3 for max_pace 3, in steps of 15 %, plus one beyond each end) keeps the
 /// cost of the best path of query frames ending in j at that pace, an exponentially weighted mean of frame
 /// distances along it with a memory of L frames (a = 1 - 1/L):
 ///   C_t[j, v] = (1 - a) * d(t, j) + a * min(C_{t-1}[j - s, v], M_{t-1}[j - s] + pace_penalty),
@@ -105,6 +105,7 @@ private:
   std::vector<float> best_;   ///< M[j]: the smallest of a place's costs
   std::vector<uint8_t> pace_;  ///< the index in slopes_ of the pace M[j] comes from
   uint8_t one_ = 0;            ///< the index of pace 1
+  size_t reach_ = 1;           ///< the most places any pace advances in one frame
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.

@@ -97,14 +97,21 @@ bool LoopDecision::recentFramesFollowOneLine() const
 {
   // At another pace than the first pass's, the run must also be straight lately: its last consistent_frames
   // matches lie within consistency_tolerance of the line through the first and last of them. A match that
-  // stalls (a sequence that kept the old pace after the robot sped up) or jumps about breaks the line.
+  // stalls (a sequence that kept the old pace after the robot sped up) or jumps about breaks the line. At the
+  // slow end the line must advance half a place more than the slowest pace would, with no tolerance: a
+  // sequence creeping along a few look-alike places at the slowest pace is a hub, not a revisit (measured on
+  // Gardens Point day_left, which has no loop: 12 such frames published without this).
   const size_t n = recent_.size();
   if (config_.max_pace <= 1 || n < 3)
     return true;
   const double first = static_cast<double>(recent_.front()), last = static_cast<double>(recent_.back());
+  const double frames = static_cast<double>(n - 1);
+  const double advanced = (last - first) * previous_direction_;
+  if (advanced < frames / config_.max_pace + 0.5 || advanced > frames * config_.max_pace + config_.consistency_tolerance)
+    return false;
   for (size_t k = 1; k + 1 < n; ++k)
   {
-    const double expected = first + (last - first) * static_cast<double>(k) / static_cast<double>(n - 1);
+    const double expected = first + (last - first) * static_cast<double>(k) / frames;
     if (std::fabs(static_cast<double>(recent_[k]) - expected) > config_.consistency_tolerance)
       return false;
   }
@@ -121,6 +128,7 @@ FrameStatus LoopDecision::decide(const Detection& detection)
   else if (!gatesPass(detection, status))
   {
   }
+
   else
   {
     if (advancesWithRun(detection))
@@ -137,8 +145,8 @@ FrameStatus LoopDecision::decide(const Detection& detection)
     previous_match_ = detection.best.id;
     previous_direction_ = detection.best.direction;
     previous_session_ = detection.best.session;
-    return run_ >= config_.consistent_frames && recentFramesFollowOneLine() ? FrameStatus::Published
-                                                                            : FrameStatus::Inconsistent;
+    const bool consistent = run_ >= config_.consistent_frames && recentFramesFollowOneLine();
+    return consistent ? FrameStatus::Published : FrameStatus::Inconsistent;
   }
   reset();
   return status;

@@ -19,19 +19,20 @@ constexpr float kNoPath = 1e30f;
 
 /// The paces of max_pace as fractions p / 60 (places per frame), slowest first: from 1 / max_pace to max_pace
 /// in steps of a factor kPaceStep, 1 exactly among them. Between two neighbours a straight line drifts by one
-/// place in about 1 / (pace * (kPaceStep - 1)) frames, which the frame term's one-place tolerance absorbs.
+/// place in about 1 / (pace * (kPaceStep - 1)) frames.
 constexpr double kPaceStep = 1.15;
 std::vector<std::pair<int, int>> slopesFor(int max_pace)
 {
   const int steps = static_cast<int>(std::ceil(std::log(static_cast<double>(max_pace)) / std::log(kPaceStep)));
   std::vector<std::pair<int, int>> slopes;
-  for (int k = -steps; k <= steps; ++k)
+  const auto add = [&slopes](double pace)
   {
-    const double pace = std::min<double>(max_pace, std::max(1.0 / max_pace, std::pow(kPaceStep, k)));
     const int p = std::max(1, static_cast<int>(std::lround(pace * 60.0)));
     if (slopes.empty() || slopes.back().first != p)
       slopes.emplace_back(p, 60);
-  }
+  };
+  for (int k = -steps; k <= steps; ++k)
+    add(std::min<double>(max_pace, std::max(1.0 / max_pace, std::pow(kPaceStep, k))));
   return slopes;
 }
 
@@ -90,7 +91,10 @@ void PaceMatcher::reset()
   }
   const size_t slopes = slopes_.size();
   one_ = static_cast<uint8_t>(std::find(slopes_.begin(), slopes_.end(), std::make_pair(60, 60)) - slopes_.begin());
-  const size_t reach = static_cast<size_t>(max_pace_);
+  reach_ = 1;
+  for (const auto& slope : slopes_)
+    reach_ = std::max(reach_, static_cast<size_t>((std::abs(slope.first) + slope.second - 1) / slope.second));
+  const size_t reach = reach_;
   old_costs_.assign((kChunk + 2 * reach) * slopes, kNoPath);
   old_best_.assign(kChunk + 2 * reach, kNoPath);
   queries_ = 0;
@@ -142,7 +146,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   const uint64_t t = queries_++;
   ++evidence_;
   const size_t slopes = slopes_.size();
-  const size_t reach = static_cast<size_t>(max_pace_);
+  const size_t reach = reach_;
   // Where each pace's path came from this frame, as an offset into the chunk's copy of the previous row.
   std::vector<long> source(slopes);
   for (size_t v = 0; v < slopes; ++v)

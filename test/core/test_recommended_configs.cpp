@@ -124,7 +124,8 @@ TEST(RecommendedConfigs, GardensPointDayLeftToNightRight)
 TEST(RecommendedConfigs, NordlandSummerToWinterFirstHalf)
 {
   // Frames 0 .. 899 as traversals of their own: the other half of the route, not the one the test below
-  // uses. Measured with openable_offline + openable_eval --mask-dark: 0.9209 near-black masked (HOG: 0.9143).
+  // uses. Measured with openable_offline + openable_eval --mask-dark: 0.9143 near-black masked with the pace
+  // matcher (64 px patch, memory of 30 frames); 0.9209 with the diagonal sums of 50 frames on a 32 px patch.
   const Config config = shipped("nordland.yaml");
   ASSERT_EQ(config.descriptor, "HOG-B");
   const Outcome masked =
@@ -132,7 +133,7 @@ TEST(RecommendedConfigs, NordlandSummerToWinterFirstHalf)
   RecordProperty("recall_at_1_masked", std::to_string(masked.recall()));
   std::printf("[ measured ] Nordland frames 0 .. 899: recall@1 %.4f (%d of %d)\n", masked.recall(), masked.hits,
               masked.evaluated);
-  EXPECT_GE(masked.recall(), 0.92);
+  EXPECT_GE(masked.recall(), 0.91);
 }
 
 TEST(RecommendedConfigs, NordlandSummerToWinterSecondHalf)
@@ -140,19 +141,20 @@ TEST(RecommendedConfigs, NordlandSummerToWinterSecondHalf)
   // Frames 900 .. 1799 (files images-09010 .. images-18000) as traversals of their own: 900 queries,
   // 32 of them near-black. A subset keeps the test short and starts both traversals mid-route.
   const Config config = shipped("nordland.yaml");
-  ASSERT_EQ(config.sequence_length, 50);
+  ASSERT_EQ(config.sequence_length, 30);
   const std::vector<cv::Mat> summer = nordlandTraversal("summer", 900, 900);
   const std::vector<cv::Mat> winter = nordlandTraversal("winter", 900, 900);
   const Outcome masked = localise(config, summer, winter, 1, true);
   const Outcome all = localise(config, summer, winter, 1, false);
   RecordProperty("recall_at_1_masked", std::to_string(masked.recall()));
   RecordProperty("recall_at_1_all", std::to_string(all.recall()));
-  // Measured with config/nordland.yaml (min_sequence_length 0: only full sequences of 50 frames are
-  // candidates): recall@1 0.9435 (819 of 868) with near-black queries masked, 0.9456 (851 of 900) over all
-  // queries. The first 49 queries have no full sequence yet and count as misses; every query after them
-  // is matched correctly, and no partial sequence at the start of the map can win any more (with
-  // partial sequences allowed, those were the 44 misses: doc/results.md).
+  std::printf("[ measured ] Nordland frames 900 .. 1799: recall@1 %.4f (%d of %d) masked, %.4f all\n",
+              masked.recall(), masked.hits, masked.evaluated, all.recall());
+  // Measured with config/nordland.yaml (the pace matcher, a memory of 30 frames): recall@1 1.000 (868 of 868)
+  // with near-black queries masked and over all 900 queries. The diagonal sums of 50 frames gave 0.9435 and
+  // 0.9456: their first 49 queries had no full sequence yet; the pace matcher's costs carry evidence from
+  // the first frame on.
   EXPECT_EQ(masked.evaluated, 868);
-  EXPECT_GE(masked.recall(), 0.943);
-  EXPECT_GE(all.recall(), 0.945);
+  EXPECT_GE(masked.recall(), 0.995);
+  EXPECT_GE(all.recall(), 0.995);
 }
