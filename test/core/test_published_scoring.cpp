@@ -135,7 +135,7 @@ TEST_F(PublishedFiles, BadFilesAreOneLineErrorsNamingTheLine)
   expectError([&] { load("query,match,distance,score,status\n1,0,0.2,0.5,published\n2,0,0.2,published\n"); },
               "line 3 has 4 fields, the header 5");
   expectError([&] { load("query,match,distance,score,status,accepted\n1,0,0.2,0.5,maybe,0\n"); },
-              "line 2: unknown status 'maybe' (known: published, not_keyframe, time_jump, too_early,");
+              "line 2: unknown status 'maybe' (known: published, not_keyframe, standstill, time_jump, too_early,");
   expectError([&] { load("query,match,distance,score,status,accepted\n1,0,0.2,0.5,published,yes\n"); },
               "accepted 'yes' is not 0 or 1");
   expectError([&] { load("query,match,distance,score,status\nx,0,0.2,0.5,published\n"); },
