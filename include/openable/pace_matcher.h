@@ -83,6 +83,8 @@ public:
 private:
   /// Keeps the row aligned with the reference: drops evicted places, appends new ones at `prior`.
   void align(const PlaceDatabase& reference, size_t candidates);
+  /// exact_ and near_ for the chunk of columns [begin, begin + m).
+  void prepareChunk(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m);
   /// The smallest normalized() of chunk `chunk`, leaving out columns within `window` of a taken one.
   float chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const;
   float value(size_t column, int* direction) const;
@@ -101,18 +103,22 @@ private:
   uint64_t first_id_ = 0;
   float prior_ = 0.0f;
   float spread_ = 0.0f;  ///< the previous row's standard deviation of frame distances  ///< the previous row's mean frame distance: the start of a place that joins the row
-  std::vector<float> costs_;  ///< C[j, v]: slopes_.size() costs a place, place after place
-  std::vector<float> best_;   ///< M[j]: the smallest of a place's costs
+  std::vector<std::vector<float>> rows_;  ///< C[j, v]: one row of places per pace, and pad_ typical ones after
+  size_t pad_ = 4;  ///< more places than any pace advances in a frame
+  std::vector<float> best_;      ///< M[j] at pad_ + j: the smallest of a place's costs, judged by its own distance
+  std::vector<float> old_best_;  ///< the previous frame's M, while match() runs
   std::vector<uint8_t> pace_;  ///< the index in slopes_ of the pace M[j] comes from
   uint8_t one_ = 0;            ///< the index of pace 1
-  size_t reach_ = 1;           ///< the most places any pace advances in one frame
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;        ///< integer frame distances
-  std::vector<float> distances_;     ///< the same, normalised
-  std::vector<float> old_costs_;  ///< the previous frame's C and M the chunk reads (up to max_pace places around it)
-  std::vector<float> old_best_;
+  std::vector<float> exact_;  ///< d(t, j), normalised
+  std::vector<float> near_;   ///< the smallest d(t, .) within pace_tolerance of j
+  std::vector<float> old_;    ///< one pace's previous costs around a chunk
+  std::vector<float> carry_;  ///< per pace, the previous frame's costs of the pad_ places before the chunk
+  std::vector<long> steps_;   ///< places each pace advances this frame
+  std::vector<int32_t> pace_chunk_;  ///< the chunk's best paces while match() runs
 };
 
 }  // namespace openable

@@ -62,7 +62,9 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     throw Error("pace_tolerance " + std::to_string(tolerance_) + " is out of range; expected 0..2 places");
   setSequenceLength(sequence_length);
   raw_.resize(kChunk + 2 * static_cast<size_t>(tolerance_));
-  distances_.resize(kChunk);
+  exact_.resize(kChunk);
+  near_.resize(kChunk);
+  pace_chunk_.resize(kChunk);
 }
 
 void PaceMatcher::setSequenceLength(int sequence_length)
@@ -89,50 +91,87 @@ void PaceMatcher::reset()
     for (size_t v = 0; v < forward; ++v)
       slopes_.emplace_back(-slopes_[v].first, slopes_[v].second);
   }
-  const size_t slopes = slopes_.size();
   one_ = static_cast<uint8_t>(std::find(slopes_.begin(), slopes_.end(), std::make_pair(60, 60)) - slopes_.begin());
-  reach_ = 1;
-  for (const auto& slope : slopes_)
-    reach_ = std::max(reach_, static_cast<size_t>((std::abs(slope.first) + slope.second - 1) / slope.second));
-  const size_t reach = reach_;
-  old_costs_.assign((kChunk + 2 * reach) * slopes, kNoPath);
-  old_best_.assign(kChunk + 2 * reach, kNoPath);
+  pad_ = static_cast<size_t>(max_pace_) + 1;
+  old_.resize(kChunk + 2 * pad_);
   queries_ = 0;
   evidence_ = 0;
   columns_ = 0;
-  costs_.clear();
+  rows_.assign(slopes_.size(), std::vector<float>());
   best_.clear();
+  old_best_.clear();
   pace_.clear();
   chunk_minimum_.clear();
 }
 
 void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
 {
-  const size_t slopes = slopes_.size();
   candidates = std::min(candidates, reference.size());
+  // Rows keep pad_ typical places after the last (reverse paces read ahead), the M buffers pad_ on each side
+  // (forward paces read behind): no edge cases in the loops.
+  const auto resize = [this](size_t front, size_t size)
+  {
+    for (auto& row : rows_)
+    {
+      row.erase(row.begin(), row.begin() + static_cast<long>(std::min(front, row.size())));
+      row.resize(size);  // keeps the old typical padding as the first new places
+      row.resize(size + pad_, prior_);
+      std::fill(row.begin() + static_cast<long>(std::min(size, columns_ - std::min(front, columns_))), row.end(),
+                prior_);
+    }
+    best_.erase(best_.begin() + static_cast<long>(pad_),
+                best_.begin() + static_cast<long>(pad_ + std::min(front, columns_)));
+    best_.resize(pad_ + size);
+    std::fill(best_.begin() + static_cast<long>(pad_ + std::min(size, columns_ - std::min(front, columns_))),
+              best_.end(), prior_);
+    best_.resize(pad_ + size + pad_, prior_);
+    std::fill(best_.begin(), best_.begin() + static_cast<long>(pad_), prior_);
+    std::fill(best_.end() - static_cast<long>(pad_), best_.end(), prior_);
+    pace_.erase(pace_.begin(), pace_.begin() + static_cast<long>(std::min(front, pace_.size())));
+    pace_.resize(size, one_);
+  };
+  if (best_.size() < 2 * pad_)
+    best_.assign(2 * pad_, prior_);
   if (reference.firstId() < first_id_ || (columns_ == 0 && reference.firstId() != first_id_))
   {
     // The reference restarted (or this is the first row): nothing of the old row applies.
+    resize(columns_, 0);
     columns_ = 0;
-    costs_.clear();
-    best_.clear();
-    pace_.clear();
     first_id_ = reference.firstId();
   }
-  if (reference.firstId() > first_id_)
-  {
-    const size_t gone = static_cast<size_t>(std::min<uint64_t>(reference.firstId() - first_id_, columns_));
-    costs_.erase(costs_.begin(), costs_.begin() + static_cast<long>(gone * slopes));
-    best_.erase(best_.begin(), best_.begin() + static_cast<long>(gone));
-    pace_.erase(pace_.begin(), pace_.begin() + static_cast<long>(gone));
-    columns_ -= gone;
-    first_id_ = reference.firstId();
-  }
-  // Places that join the row start as typical; places that left it (the exclusion grew) are dropped.
+  // Places evicted from the reference leave the row; places that join it (the reference grew, or the
+  // exclusion let them in) start as typical; places the exclusion took back are dropped.
+  const size_t gone = static_cast<size_t>(std::min<uint64_t>(reference.firstId() - first_id_, columns_));
+  first_id_ = reference.firstId();
+  resize(gone, candidates);
   columns_ = candidates;
-  costs_.resize(candidates * slopes, prior_);
-  best_.resize(candidates, prior_);
-  pace_.resize(candidates, one_);
+}
+
+void PaceMatcher::prepareChunk(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m)
+{
+  // The chunk's distances and `tolerance` places on each side.
+  const size_t n = columns_;
+  const size_t tolerance = static_cast<size_t>(tolerance_);
+  const size_t low = begin > tolerance ? begin - tolerance : 0;
+  const size_t high = std::min(n, begin + m + tolerance);
+  metric_.row(query, reference.descriptor(low), high - low, raw_.data());
+  const uint32_t* own = raw_.data() + (begin - low);
+  for (size_t i = 0; i < m; ++i)
+  {
+    // A path may be off its line by `tolerance` places (a pace between two of the slopes): each frame counts
+    // the nearest of the place and its neighbours within it.
+    const size_t j = begin + i;
+    uint32_t nearest = own[i];
+    for (size_t k = 1; k <= tolerance; ++k)
+    {
+      if (j >= k)
+        nearest = std::min(nearest, own[static_cast<long>(i) - static_cast<long>(k)]);
+      if (j + k < n)
+        nearest = std::min(nearest, own[i + k]);
+    }
+    exact_[i] = static_cast<float>(own[i]) * inverse_max_distance_;
+    near_[i] = static_cast<float>(nearest) * inverse_max_distance_;
+  }
 }
 
 void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates)
@@ -146,14 +185,14 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   const uint64_t t = queries_++;
   ++evidence_;
   const size_t slopes = slopes_.size();
-  const size_t reach = reach_;
-  // Where each pace's path came from this frame, as an offset into the chunk's copy of the previous row.
-  std::vector<long> source(slopes);
+  // The places each pace advances this frame: a path comes from j - step (forward) or j + step (reverse).
+  std::vector<long>& steps = steps_;
+  steps.resize(slopes);
   for (size_t v = 0; v < slopes; ++v)
   {
     const int p = slopes_[v].first;
-    const int step = stepAt(t, std::abs(p), slopes_[v].second);
-    source[v] = static_cast<long>(reach) - (p > 0 ? step : -step);
+    const long step = stepAt(t, std::abs(p), slopes_[v].second);
+    steps[v] = p > 0 ? step : -step;
   }
   // A row's first frame has no path behind it: every place starts from its own distance.
   const float keep = first_row ? 0.0f : keep_;
@@ -163,77 +202,74 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   // So a path changes pace for a real change of the revisit, not to chase the noise of one frame, whatever the
   // data, the descriptor and L are.
   const float change_cost = keep > 0.0f ? step_penalty_ * spread_ * std::sqrt(fresh / (1.0f + keep)) : 0.0f;
-  // The previous frame's costs of the `reach` places before the chunk (already overwritten in place). Before
-  // the first place and after the last, a path starts afresh: typical, as a place that joins the row.
-  std::fill(old_costs_.begin(), old_costs_.begin() + static_cast<long>(reach * slopes), prior_);
-  std::fill(old_best_.begin(), old_best_.begin() + static_cast<long>(reach), prior_);
+  // M_{t-1} is read while M_t is written; both keep pad_ typical places on each side.
+  std::swap(best_, old_best_);
+  best_.assign(old_best_.size(), prior_);
+  // A forward pace reads up to pad_ places before its own, already overwritten by the chunk before: the
+  // previous frame's costs of those places are carried from chunk to chunk.
+  carry_.assign(slopes * pad_, prior_);
   double distance_sum = 0.0, square_sum = 0.0;
   for (size_t begin = 0, chunk = 0; begin < n; begin += kChunk, ++chunk)
   {
     const size_t m = std::min(kChunk, n - begin);
-    // The chunk's distances and `tolerance` places on each side.
-    const size_t tolerance = static_cast<size_t>(tolerance_);
-    const size_t low = begin > tolerance ? begin - tolerance : 0;
-    const size_t high = std::min(n, begin + m + tolerance);
-    metric_.row(query, reference.descriptor(low), high - low, raw_.data());
-    const uint32_t* own = raw_.data() + (begin - low);
-    // The previous frame's costs of this chunk and of the `reach` places after it, not yet overwritten.
-    const size_t after = std::min(n, begin + m + reach) - begin;
-    std::copy(costs_.begin() + static_cast<long>(begin * slopes),
-              costs_.begin() + static_cast<long>((begin + after) * slopes),
-              old_costs_.begin() + static_cast<long>(reach * slopes));
-    std::fill(old_costs_.begin() + static_cast<long>((reach + after) * slopes), old_costs_.end(), prior_);
-    std::copy(best_.begin() + static_cast<long>(begin), best_.begin() + static_cast<long>(begin + after),
-              old_best_.begin() + static_cast<long>(reach));
-    std::fill(old_best_.begin() + static_cast<long>(reach + after), old_best_.end(), prior_);
-
+    prepareChunk(query, reference, begin, m);
+    float* best = best_.data() + pad_ + begin;
+    uint8_t* pace = pace_.data() + begin;
+    for (size_t i = 0; i < m; ++i)
+    {
+      distance_sum += exact_[i];
+      square_sum += double(exact_[i]) * exact_[i];
+      best[i] = kNoPath;
+      pace_chunk_[i] = one_;
+    }
+    const float* old_best = old_best_.data() + pad_ + begin;
+    for (size_t v = 0; v < slopes; ++v)
+    {
+      float* row = rows_[v].data() + begin;
+      const long step = steps[v];
+      // old[i - step] is the previous frame's cost of place begin + i - step.
+      const float* old = row;
+      if (step >= 0)
+      {
+        float* scratch = old_.data();
+        std::copy(carry_.begin() + static_cast<long>(v * pad_), carry_.begin() + static_cast<long>((v + 1) * pad_),
+                  scratch);
+        std::copy(row, row + m, scratch + pad_);
+        std::copy(scratch + m, scratch + m + pad_, carry_.begin() + static_cast<long>(v * pad_));
+        old = scratch + pad_;
+      }
+      else if (step < 0)
+      {
+        std::copy(row, row + m - step, old_.data());  // the places after the chunk are in the row (or its padding)
+        old = old_.data();
+      }
+      const float* __restrict from = old - step;
+      const float* __restrict from_best = old_best - step;
+      const float* __restrict d = near_.data();
+      float* __restrict out = row;
+      for (size_t i = 0; i < m; ++i)
+        out[i] = fresh * d[i] + keep * std::min(from[i], from_best[i] + change_cost);
+      // The best pace so far, in 32-bit lanes beside the float costs so that the loop vectorises.
+      float* __restrict best_chunk = best;
+      int32_t* __restrict pace_chunk = pace_chunk_.data();
+      const int32_t index = static_cast<int32_t>(v);
+      for (size_t i = 0; i < m; ++i)
+      {
+        const int32_t better = -static_cast<int32_t>(out[i] < best_chunk[i]);  // all ones where this pace wins
+        best_chunk[i] = std::min(out[i], best_chunk[i]);
+        pace_chunk[i] = (pace_chunk[i] & ~better) | (index & better);
+      }
+    }
+    for (size_t i = 0; i < m; ++i)
+      pace[i] = static_cast<uint8_t>(pace_chunk_[i]);
+    // The place itself is judged by its own distance this frame: the tolerance is for the path behind it.
     float minimum = kNoPath;
     for (size_t i = 0; i < m; ++i)
     {
-      // A path may be off its line by `tolerance` places (a pace between two of the slopes): each frame counts
-      // the nearest of the place and its neighbours within it.
-      const size_t j = begin + i;
-      uint32_t nearest = own[i];
-      for (size_t k = 1; k <= tolerance; ++k)
-      {
-        if (j >= k)
-          nearest = std::min(nearest, own[static_cast<long>(i) - static_cast<long>(k)]);
-        if (j + k < n)
-          nearest = std::min(nearest, own[i + k]);
-      }
-      const float exact = static_cast<float>(own[i]) * inverse_max_distance_;
-      distance_sum += exact;
-      square_sum += double(exact) * exact;
-      const float d = static_cast<float>(nearest) * inverse_max_distance_;
-      float best = kNoPath;
-      uint8_t pace = one_;
-      float* costs = costs_.data() + (begin + i) * slopes;
-      for (size_t v = 0; v < slopes; ++v)
-      {
-        const size_t from = static_cast<size_t>(static_cast<long>(i) + source[v]);
-        // Keep the pace, or take the place's best path at any pace for the penalty (the robot sped up or slowed down).
-        const float* before = old_costs_.data() + from * slopes;
-        const float changed = old_best_[from];
-        const float path = std::min(before[v], changed + change_cost);
-        costs[v] = fresh * d + keep * path;
-        if (costs[v] < best)
-        {
-          best = costs[v];
-          pace = static_cast<uint8_t>(v);
-        }
-      }
-      // The place itself is judged by its own distance this frame: the tolerance is for the path behind it.
-      best += fresh * (exact - d);
-      best_[begin + i] = best;
-      pace_[begin + i] = pace;
-      minimum = std::min(minimum, best);
+      best[i] += fresh * (exact_[i] - near_[i]);
+      minimum = std::min(minimum, best[i]);
     }
     chunk_minimum_[chunk] = minimum;
-    // The next chunk's "before" places: this chunk's last `reach` ones, as they were.
-    std::copy(old_costs_.begin() + static_cast<long>(m * slopes),
-              old_costs_.begin() + static_cast<long>((m + reach) * slopes), old_costs_.begin());
-    std::copy(old_best_.begin() + static_cast<long>(m), old_best_.begin() + static_cast<long>(m + reach),
-              old_best_.begin());
   }
   prior_ = static_cast<float>(distance_sum / static_cast<double>(n));
   spread_ = static_cast<float>(std::sqrt(std::max(0.0, square_sum / static_cast<double>(n) - double(prior_) * prior_)));
@@ -243,7 +279,7 @@ float PaceMatcher::value(size_t column, int* direction) const
 {
   if (direction)
     *direction = slopes_[pace_[column]].first > 0 ? 1 : -1;
-  return best_[column];
+  return best_[pad_ + column];
 }
 
 float PaceMatcher::normalized(size_t column, int* direction, int min_terms) const
