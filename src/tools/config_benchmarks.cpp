@@ -5,6 +5,9 @@
 //   BM_ConfigMatch/<config>/<N>       one frame of sequence matching (the config's L, descriptor and direction)
 //                                     against N stored places, and the choice of its top_k distinct candidates
 //                                     as LoopDetector makes it: the scan of the history every frame pays
+//   BM_ConfigPaceMatch/<config>/<N>   the same frame with sequences at any pace (PaceMatcher, the config's max_pace,
+//                                     pace_penalty and pace_tolerance; max_pace 3 when the config says 1), the
+//                                     matcher the shipped configurations run
 //   BM_ConfigMemoryRead/<config>/<N>  reading those N descriptors once (a sum over every word)
 //   BM_ConfigMatchLength/gardens_point/10000000/<L>
 //                                     BM_ConfigMatch with another sequence length: a frame reads each descriptor
@@ -26,6 +29,7 @@
 
 #include "openable/config.h"
 #include "openable/frame_describer.h"
+#include "openable/pace_matcher.h"
 #include "openable/place_database.h"
 #include "openable/sequence_matcher.h"
 
@@ -173,6 +177,34 @@ void configMatch(benchmark::State& state, const std::string& name, size_t n, int
   setBytes(state, db);
 }
 
+void configPaceMatch(benchmark::State& state, const std::string& name, size_t n)
+{
+  const openable::Config config = shipped(name);
+  const openable::PlaceDatabase& db = database(name, n);
+  openable::PaceOptions pace;
+  pace.max_pace = std::max(3, config.max_pace);
+  pace.penalty = static_cast<float>(config.pace_penalty);
+  pace.tolerance = config.pace_tolerance;
+  openable::PaceMatcher matcher(db.layout(), config.sequence_length, config.bidirectional, pace);
+  std::mt19937_64 rng(99);
+  std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));
+  for (auto& q : queries)
+    randomDescriptor(db.layout(), rng, q.data());
+  for (int i = 0; i < 3; ++i)  // past the first row, which has no path behind it
+    matcher.match(queries[i % queries.size()].data(), db, n);
+  size_t i = 0;
+  std::vector<size_t> candidates;
+  const size_t wanted = size_t(std::max(config.top_k, 2));
+  for (auto _ : state)
+  {
+    matcher.match(queries[i++ % queries.size()].data(), db, n);
+    matcher.smallestDistinct(wanted, size_t(config.uniqueness_window), 1, candidates);
+    benchmark::DoNotOptimize(candidates.data());
+  }
+  setBytes(state, db);
+  state.counters["paces"] = double(matcher.paces().size());
+}
+
 void configMemoryRead(benchmark::State& state, const std::string& name, size_t n)
 {
   const openable::PlaceDatabase& db = database(name, n);
@@ -205,6 +237,8 @@ void registerConfigBenchmarks()
         continue;
       const std::string suffix = name + "/" + std::to_string(n);
       benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n, 0)
+          ->Unit(benchmark::kMillisecond);
+      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n)
           ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
           ->Unit(benchmark::kMillisecond);
