@@ -15,9 +15,16 @@ constexpr uint64_t kWorkingBytesPerPatchPixel = 16;
 constexpr uint64_t kMaxWorkingBytesPerFrame = uint64_t(1) << 30;
 
 /// Every parameter of the toolbox. The same snake_case keys are used in YAML files, on the command line
-/// (`--set key=value`) and as private ROS parameters of the nodelets. config/default.yaml documents them.
+/// (`--set key=value`) and as private ROS parameters of the nodelets. The member defaults are
+/// config/default.yaml's values (a test keeps them equal), so a bare nodelet, `openable_offline` without
+/// --config and a YAML that sets a few keys all mean "default.yaml with these changes". Config::paper() is the
+/// OpenABLE paper's configuration (config/paper.yaml).
 struct Config
 {
+  /// The paper's values: LDB, single images, no acceptance gate, the first pass's pace only. Publishes
+  /// nothing by itself (no gate is set); reproduces the paper's matrices.
+  static Config paper();
+
   // Camera and description.
   std::string camera_type = "mono";         ///< mono | stereo | panoramic
   std::string description_type = "global";  ///< global | grid
@@ -28,29 +35,29 @@ struct Config
   bool illumination_invariance = false;     ///< paper Eq. 6 before description (needs colour input)
   double alpha = 0.47;                      ///< alpha of Eq. 6 (0.47 for KITTI's Flea2, see Eq. 7)
   int patch_normalization = 0;              ///< block side for local contrast normalisation of patches (0 = off)
-  std::string descriptor = "LDB";           ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG
+  std::string descriptor = "HOG-B";         ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG
 
   // Matching.
-  int sequence_length = 1;      ///< L: a place is the sequence of the last L frames
+  int sequence_length = 30;     ///< L: a place is the sequence of the last L frames
   int min_sequence_length = 1;  ///< sequences with fewer frames are not candidates (0 = only full, L, sequences)
   double threshold = -1.0;      ///< accept a loop when the normalised distance is <= threshold; -1 = no gate
   int exclusion_window = 50;    ///< loop-closure mode: the last N frames before the current one are never matched
   int top_k = 5;                ///< candidates reported per frame
-  double min_uniqueness = 0.0;  ///< accept only when 1 - best/second best >= this (0 = off)
+  double min_uniqueness = 0.06; ///< accept only when 1 - best/second best >= this (0 = off)
   int uniqueness_window = 10;   ///< frames around the best match ignored when looking for the second best
   bool bidirectional = false;   ///< also match sequences driven in the opposite direction
   int max_history = 0;          ///< frames kept in the loop-closure history (0 = unbounded)
-  int max_pace = 1;             ///< places a revisit may advance per frame: 1 = the first pass's pace (diagonal
+  int max_pace = 3;             ///< places a revisit may advance per frame: 1 = the first pass's pace (diagonal
                                 ///< sums); > 1 = any pace from a stop to max_pace (PaceMatcher)
   double pace_penalty = 3.0;    ///< PaceMatcher: cost of a change of pace, in standard deviations of a
                                 ///< sequence's distance under noise
-  int pace_tolerance = 1;       ///< PaceMatcher: places a sequence may be off its line in each frame (0..2)
-  double standstill_distance = 0.0;  ///< a frame this close (normalised) to the last stored one is the camera
+  int pace_tolerance = 0;       ///< PaceMatcher: places a sequence may be off its line in each frame (0..2)
+  double standstill_distance = 0.002;  ///< a frame this close (normalised) to the last stored one is the camera
                                      ///< standing still: not stored, not matched (0 = off)
 
   // Loop-closure decision (OnlineDetector): what must hold, besides the gates above, before a loop is published.
   int min_candidates = 60;         ///< fewer full-sequence candidate places: "too early" (uniqueness needs rivals)
-  int consistent_frames = 4;       ///< this many consecutive frames must pass the gates with matches advancing
+  int consistent_frames = 10;      ///< this many consecutive frames must pass the gates with matches advancing
                                    ///< together (1 = off)
   int consistency_tolerance = 2;   ///< frames a match may deviate from advancing one place per frame
   double exclusion_seconds = 0.0;  ///< loop-closure mode: frames stamped less than this before the query are

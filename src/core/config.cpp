@@ -143,6 +143,19 @@ void Config::validateOrThrow() const
   throw Error(message);
 }
 
+Config Config::paper()
+{
+  Config c;
+  c.descriptor = "LDB";
+  c.sequence_length = 1;
+  c.min_uniqueness = 0.0;
+  c.max_pace = 1;
+  c.pace_tolerance = 1;
+  c.standstill_distance = 0.0;
+  c.consistent_frames = 4;
+  return c;
+}
+
 Config Config::fromYamlString(const std::string& yaml)
 {
   YAML::Node root;

@@ -23,9 +23,9 @@ bool anyErrorMentions(const std::vector<std::string>& errors, const std::string&
 }
 }  // namespace
 
-TEST(Config, DefaultsAreThePapersAndValid)
+TEST(Config, PaperValuesAreThePapersAndValid)
 {
-  const Config c;
+  const Config c = Config::paper();
   EXPECT_EQ(c.camera_type, "mono");
   EXPECT_EQ(c.description_type, "global");
   EXPECT_EQ(c.patch_size, 64);
@@ -36,21 +36,50 @@ TEST(Config, DefaultsAreThePapersAndValid)
   EXPECT_DOUBLE_EQ(c.alpha, 0.47);
   EXPECT_EQ(c.descriptor, "LDB");
   EXPECT_EQ(c.sequence_length, 1);
+  EXPECT_EQ(c.max_pace, 1);
   EXPECT_DOUBLE_EQ(c.threshold, -1.0);
+  EXPECT_DOUBLE_EQ(c.min_uniqueness, 0.0);
   EXPECT_EQ(c.color_map, 7);
   EXPECT_TRUE(c.validate().empty());
 }
 
-TEST(Config, PaperYamlFileHoldsEveryKeyWithItsDefault)
+TEST(Config, DefaultsPublishAtAnyPaceAndAreValid)
 {
-  const Config file = Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/paper.yaml");
-  const Config defaults;
+  const Config c;
+  EXPECT_EQ(c.descriptor, "HOG-B");
+  EXPECT_EQ(c.sequence_length, 30);
+  EXPECT_EQ(c.max_pace, 3);
+  EXPECT_GT(c.min_uniqueness, 0.0) << "a gate must be set, or nothing is published";
+  EXPECT_GT(c.standstill_distance, 0.0);
+  EXPECT_TRUE(c.validate().empty());
+}
+
+namespace
+{
+/// Every key of a shipped YAML file equals the given configuration, and every key is written in the file.
+void expectFileHoldsEveryKey(const std::string& name, const Config& expected)
+{
+  const std::string path = std::string(OPENABLE_SOURCE_DIR) + "/config/" + name;
+  const Config file = Config::fromYamlFile(path);
   for (const auto& key : Config::keys())
-    EXPECT_EQ(file.get(key.name), defaults.get(key.name)) << key.name;
-  std::ifstream in(std::string(OPENABLE_SOURCE_DIR) + "/config/paper.yaml");
+    EXPECT_EQ(file.get(key.name), expected.get(key.name)) << name << ": " << key.name;
+  std::ifstream in(path);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const auto& key : Config::keys())
-    EXPECT_NE(text.find("\n" + key.name + ":"), std::string::npos) << key.name << " is not documented";
+    EXPECT_NE(text.find("\n" + key.name + ":"), std::string::npos) << key.name << " is not documented in " << name;
+}
+}  // namespace
+
+TEST(Config, PaperYamlFileHoldsEveryKeyWithThePapersValue)
+{
+  expectFileHoldsEveryKey("paper.yaml", Config::paper());
+}
+
+// A bare nodelet, openable_offline without --config and a partial YAML all start from the code's defaults:
+// they must be default.yaml's, or "one set of defaults" drifts.
+TEST(Config, DefaultYamlFileHoldsEveryKeyWithTheCodesDefault)
+{
+  expectFileHoldsEveryKey("default.yaml", Config());
 }
 
 TEST(Config, SetGetAndYamlRoundTrip)
@@ -184,7 +213,7 @@ TEST(ConfigHardening, ListAsKeyIsAnOpenableError)
 
 TEST(ConfigHardening, HistoryBoundMessageDoesNotWrap)
 {
-  Config c;
+  Config c = Config::paper();
   c.max_history = 1000;
   c.exclusion_window = 2147483647;
   EXPECT_TRUE(anyErrorMentions(c.validate(), "max_history", "= 4294967296")) << ::testing::PrintToString(c.validate());

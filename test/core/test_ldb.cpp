@@ -109,7 +109,7 @@ TEST(Ldb, EqualsNaivePixelByPixelReferenceOnRandomPatches)
 
 TEST(Ldb, IsDeterministicAndPinnedOnARealImage)
 {
-  Config config;
+  Config config = Config::paper();
   const FrameDescriber describer(config);
   const cv::Mat image = openable_test::gardensPoint("day_left", 0);
   ASSERT_FALSE(image.empty());
@@ -149,14 +149,14 @@ TEST(Ldb, SmallPatchOrWrongTypeIsAClearError)
 {
   EXPECT_THROW(ldb(cv::Mat(9, 9, CV_32F, cv::Scalar(0))), Error);
   EXPECT_THROW(ldb(cv::Mat(16, 16, CV_16U, cv::Scalar(0))), Error);
-  Config c;
+  Config c = Config::paper();
   c.patch_size = 8;  // allowed by the config, too small for LDB
   EXPECT_THROW(FrameDescriber{c}, Error);
 }
 
 TEST(Ldb, SameRealPlaceIsCloserThanOtherPlaces)
 {
-  const FrameDescriber describer{Config()};
+  const FrameDescriber describer{Config::paper()};
   const auto left = describer.describeImage(openable_test::gardensPoint("day_left", 100));
   const auto right = describer.describeImage(openable_test::gardensPoint("day_right", 100));
   const auto other = describer.describeImage(openable_test::gardensPoint("day_right", 10));

@@ -12,7 +12,7 @@ namespace
 {
 Config decisionConfig()
 {
-  Config c;
+  Config c = Config::paper();
   c.min_uniqueness = 0.1;
   c.min_candidates = 10;
   c.consistent_frames = 3;

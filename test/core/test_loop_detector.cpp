@@ -32,7 +32,7 @@ std::vector<FrameDescriptor> revisitingStream()
 
 TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
 {
-  Config c;
+  Config c = Config::paper();
   c.sequence_length = 5;
   c.exclusion_window = 20;
   c.threshold = 0.2;
@@ -66,7 +66,7 @@ TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
 
 TEST(LoopDetector, TopKAreDistinctPlacesBestFirst)
 {
-  Config c;
+  Config c = Config::paper();
   c.top_k = 4;
   c.uniqueness_window = 3;
   c.exclusion_window = 0;
@@ -87,7 +87,7 @@ TEST(LoopDetector, TopKAreDistinctPlacesBestFirst)
 
 TEST(LoopDetector, LastRowHasNaNForExcludedFramesAndItself)
 {
-  Config c;
+  Config c = Config::paper();
   c.exclusion_window = 3;
   LoopDetector detector(c);
   std::mt19937_64 rng(8);
@@ -102,7 +102,7 @@ TEST(LoopDetector, LastRowHasNaNForExcludedFramesAndItself)
 
 TEST(LoopDetector, LocalisationModeMatchesAgainstAFixedMap)
 {
-  Config c;
+  Config c = Config::paper();
   c.sequence_length = 3;
   std::mt19937_64 rng(6);
   PlaceDatabase map(FrameDescriber(c).layout());
@@ -129,7 +129,7 @@ TEST(LoopDetector, LocalisationModeMatchesAgainstAFixedMap)
 
 TEST(LoopDetector, UpdateMatchingChangesLiveKeysAndRefusesDescriptorKeys)
 {
-  Config c;
+  Config c = Config::paper();
   LoopDetector detector(c);
   Config live = c;
   live.threshold = 0.3;
@@ -149,7 +149,7 @@ TEST(LoopDetector, UpdateMatchingChangesLiveKeysAndRefusesDescriptorKeys)
 
 TEST(LoopDetector, ResetForgetsHistoryButKeepsIdsIncreasing)
 {
-  LoopDetector detector{Config()};
+  LoopDetector detector{Config::paper()};
   std::mt19937_64 rng(10);
   for (int i = 0; i < 5; ++i)
     detector.process(openable_test::randomWords(rng, 22));
@@ -162,13 +162,13 @@ TEST(LoopDetector, ResetForgetsHistoryButKeepsIdsIncreasing)
 
 TEST(LoopDetector, WrongDescriptorSizeIsAClearError)
 {
-  LoopDetector detector{Config()};
+  LoopDetector detector{Config::paper()};
   EXPECT_THROW(detector.process(FrameDescriptor(3)), Error);
 }
 
 TEST(LoopDetector, MinSequenceLengthLeavesPartialSequencesOut)
 {
-  Config c;
+  Config c = Config::paper();
   c.sequence_length = 4;
   c.min_sequence_length = 0;  // only full sequences
   std::mt19937_64 rng(30);
@@ -203,7 +203,7 @@ TEST(LoopDetector, AcceptanceNeedsAtLeastOneGateAndEverySetGate)
   const auto frames = revisitingStream();
   auto acceptedAt70 = [&frames](double threshold, double min_uniqueness)
   {
-    Config c;
+    Config c = Config::paper();
     c.sequence_length = 5;
     c.exclusion_window = 20;
     c.threshold = threshold;

@@ -53,7 +53,7 @@ const Drive& drive(const FrameDescriber& describer)
 
 Config panoramicConfig(bool bidirectional)
 {
-  Config config;
+  Config config = Config::paper();
   config.camera_type = "panoramic";
   config.panoramas = 4;
   config.sequence_length = 5;

@@ -30,9 +30,9 @@ double recallAtOne(const Config& config, const std::string& reference, const std
 
 TEST(RealData, GardensPointDayLeftVsDayRightWithSequencesOfFive)
 {
-  Config config;
+  Config config = Config::paper();
   config.sequence_length = 5;
-  const double single = recallAtOne(Config(), "day_left", "day_right", 2);
+  const double single = recallAtOne(Config::paper(), "day_left", "day_right", 2);
   const double sequences = recallAtOne(config, "day_left", "day_right", 2);
   RecordProperty("recall_at_1_L1", std::to_string(single));
   RecordProperty("recall_at_1_L5", std::to_string(sequences));

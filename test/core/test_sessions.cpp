@@ -21,7 +21,9 @@ constexpr size_t kWords = 22;  // LDB on a 64-pixel patch
 
 Config ldbConfig()
 {
-  Config c;
+  // The paper's sequences (max_pace 1: only full sequences of L are candidates), which these tests were
+  // written for; PaceSequencesDoNotRunAcrossTheEndOfOneSessionIntoTheNext runs the PaceMatcher.
+  Config c = Config::paper();
   c.descriptor = "LDB";
   c.patch_size = 64;
   c.sequence_length = 5;
@@ -271,6 +273,56 @@ TEST(LoopDetector, SequencesDoNotRunAcrossTheEndOfOneSessionIntoTheNext)
     // apart, two has only i + 1 frames of that chain (fewer than L = 5): no near-perfect match exists.
     EXPECT_FALSE(d.best.session == 1 && d.best.id == 20u + static_cast<uint64_t>(i)) << i;
     EXPECT_GT(d.best.distance, 0.2f) << i;
+  }
+}
+
+TEST(LoopDetector, PaceSequencesDoNotRunAcrossTheEndOfOneSessionIntoTheNext)
+{
+  // With sequences at any pace every place is a candidate from its first frame, so the rule differs from the
+  // paper's: a path into session two's first place must start there (from the row's prior), never continue
+  // from session one's last place. The same query frames against session two alone give the same distances;
+  // the same places stored as ONE session (the path may run through) give a closer match.
+  Config c = ldbConfig();
+  c.max_pace = 3;
+  c.exclusion_window = 0;
+  std::mt19937_64 rng(5);
+  const std::vector<FrameDescriptor> one = route(rng, 20), two = route(rng, 20);
+  std::vector<FrameDescriptor> queries;
+  for (int i = 15; i < 20; ++i)
+    queries.push_back(revisit(one[static_cast<size_t>(i)], rng));
+  for (int i = 0; i < 3; ++i)
+    queries.push_back(revisit(two[static_cast<size_t>(i)], rng));
+  // The distance of the query frame 5 + i (two[i] seen again) to two[i], for each stored layout.
+  const auto distancesToTwo = [&](const std::vector<std::vector<FrameDescriptor>>& sessions, uint64_t first_of_two)
+  {
+    SessionMap map(layoutOf(c), c.toYaml());
+    for (size_t s = 0; s < sessions.size(); ++s)
+    {
+      const uint32_t id = map.addSession({"s" + std::to_string(s), "", 0.0});
+      for (const auto& f : sessions[s])
+        map.add(id, f);
+    }
+    LoopDetector detector(c, map, MapMode::Continue, SessionInfo{"query", "", 0.0});
+    std::vector<float> out;
+    for (size_t q = 0; q < queries.size(); ++q)
+    {
+      detector.process(queries[q]);
+      std::vector<float> row;
+      detector.lastRow(row);
+      if (q >= 5)
+        out.push_back(row[first_of_two + (q - 5)]);
+    }
+    return out;
+  };
+  std::vector<FrameDescriptor> joined = one;
+  joined.insert(joined.end(), two.begin(), two.end());
+  const std::vector<float> apart = distancesToTwo({one, two}, 20);
+  const std::vector<float> alone = distancesToTwo({two}, 0);
+  const std::vector<float> through = distancesToTwo({joined}, 20);
+  for (size_t i = 0; i < apart.size(); ++i)
+  {
+    EXPECT_FLOAT_EQ(apart[i], alone[i]) << i;
+    EXPECT_LT(through[i], apart[i]) << i << ": the joined route should have given the path a head start";
   }
 }
 

@@ -60,7 +60,7 @@ std::map<std::string, std::string> fields(const VerifierParams& p)
 /// A valid configuration whose every verify_* key differs from its default.
 Config nonDefaultVerifier()
 {
-  Config c;
+  Config c = Config::paper();
   c.set("verify_max_features", "1500");
   c.set("verify_ratio", "0.7");
   c.set("verify_max_hamming", "70");
@@ -105,8 +105,8 @@ TEST(VerifierKeys, OneKeyPerFieldNeitherLiveNorDescribing)
 
 TEST(VerifierKeys, DefaultsAreVerifierParamsDefaults)
 {
-  EXPECT_EQ(fields(verifierParams(Config())), fields(VerifierParams()));
-  EXPECT_TRUE(Config().validate().empty());
+  EXPECT_EQ(fields(verifierParams(Config::paper())), fields(VerifierParams()));
+  EXPECT_TRUE(Config::paper().validate().empty());
 }
 
 TEST(VerifierKeys, EveryKeyReachesItsField)
@@ -155,28 +155,28 @@ TEST(VerifierKeys, OutOfRangeIsRefusedNamingTheKey)
   ASSERT_EQ(bad.size(), verifierKeys().size());
   for (const auto& [key, value] : bad)
   {
-    Config c;
+    Config c = Config::paper();
     c.set(key, value);
     EXPECT_TRUE(anyErrorStartsWith(c.validate(), key + ": value '", "not allowed"))
         << key << " = " << value << ": " << ::testing::PrintToString(c.validate());
     EXPECT_THROW(c.validateOrThrow(), Error) << key;
   }
-  Config ratio;
+  Config ratio = Config::paper();
   ratio.verify_ratio = 0.0;
   EXPECT_TRUE(anyErrorStartsWith(ratio.validate(), "verify_ratio: value '0'", "a number in (0, 1]"))
       << ::testing::PrintToString(ratio.validate());
-  Config confidence;
+  Config confidence = Config::paper();
   confidence.verify_ransac_confidence = 1.0;
   EXPECT_TRUE(anyErrorStartsWith(confidence.validate(), "verify_ransac_confidence", "a number in (0, 1)"))
       << ::testing::PrintToString(confidence.validate());
-  Config nan;
+  Config nan = Config::paper();
   nan.verify_ransac_threshold_px = std::nan("");
   EXPECT_TRUE(anyErrorStartsWith(nan.validate(), "verify_ransac_threshold_px", "not allowed"));
 }
 
 TEST(VerifierKeys, DisparityBoundsRuleNamesBothKeys)
 {
-  Config c;
+  Config c = Config::paper();
   c.verify_stereo_min_disparity_px = 200.0;  // in its range, but above the largest disparity (160)
   EXPECT_TRUE(anyErrorStartsWith(c.validate(), "verify_stereo_min_disparity_px/verify_stereo_max_disparity_px",
                                  "below the largest"))
@@ -189,7 +189,7 @@ TEST(VerifierKeys, TheTablesRangesAreNoLooserThanTheVerifiers)
   for (const auto& key : verifierKeys())
     for (const bool low : {true, false})
     {
-      Config c;
+      Config c = Config::paper();
       double value = low ? key.min : key.max;
       if (low && key.min_exclusive)
         value = key.min + 1e-6;
@@ -230,8 +230,8 @@ TEST(VerifierKeys, OnlineDetectorBuildsItsVerifierFromTheConfig)
 TEST(VerifierKeys, DescriptorHashIgnoresThem)
 {
   // They do not change what is stored: descriptors sent with another verifier are still comparable.
-  EXPECT_EQ(descriptorHash(nonDefaultVerifier()), descriptorHash(Config()));
-  EXPECT_TRUE(descriptorDifferences(nonDefaultVerifier(), Config()).empty());
+  EXPECT_EQ(descriptorHash(nonDefaultVerifier()), descriptorHash(Config::paper()));
+  EXPECT_TRUE(descriptorDifferences(nonDefaultVerifier(), Config::paper()).empty());
 }
 
 TEST(VerifierKeys, MapsAreCompatibleWhateverTheVerifierKeys)

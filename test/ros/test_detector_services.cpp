@@ -191,7 +191,7 @@ TEST_F(DetectorServices, SaveLoadResetRoundTripAndBadMapsAreRefused)
 
   // An incompatible map (another patch size) is refused, naming the key.
   {
-    openable::Config other;
+    openable::Config other = openable::Config::paper();
     other.patch_size = 32;
     openable::FrameDescriber describer(other);
     openable::PlaceDatabase database(describer.layout(), 0, other.toYaml());

@@ -38,10 +38,10 @@ std::string tempMap(const std::string& name)
 }
 
 /// A map of one session "day": day_right frames [0, count), described as the nodelet describes
-/// (the default configuration; only matching keys differ in the launch file).
+/// (the paper's configuration, as the launch file loads it; only matching keys differ there).
 void writeDayMap(const std::string& path, int count)
 {
-  const openable::Config config;
+  const openable::Config config = openable::Config::paper();
   openable::FrameDescriber describer(config);
   openable::SessionMap map(describer.layout(), config.toYaml());
   const uint32_t day = map.addSession({"day", "robot_a", 0.0});
