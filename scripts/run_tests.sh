@@ -34,5 +34,23 @@ if [ $run_rc -ne 0 ] && [ $failed -eq 0 ]; then
   echo "catkin_make run_tests failed without a failing test result (a test did not build or run; see $log)"
   failed=1
 fi
+
+# One more test where an aarch64 compiler is installed (install_deps.sh): the Hamming kernels and their test
+# built for aarch64 without ROS, run under qemu-user (scripts/cross_check_aarch64.sh, output in build/).
+if command -v aarch64-linux-gnu-g++ > /dev/null || [ "$(uname -m)" = aarch64 ]; then
+  cross_log=$root/build/cross_check_aarch64.log
+  bash "$root/scripts/cross_check_aarch64.sh" > "$cross_log" 2>&1
+  cross_rc=$?
+  if [ $cross_rc -ne 77 ]; then
+    tests=$((tests + 1))
+    if [ $cross_rc -eq 0 ]; then
+      tail -n 1 "$cross_log"
+    else
+      tail -n 20 "$cross_log"
+      failures=$((failures + 1))
+      failed=$((failed + 1))
+    fi
+  fi
+fi
 echo "$((tests - errors - failures)) passed, $failed failed"
 [ $failed -eq 0 ] && [ $results_rc -eq 0 ]

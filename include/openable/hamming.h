@@ -8,13 +8,15 @@
 namespace openable
 {
 /// Hamming distance kernels. Every kernel returns exactly the same numbers; the fastest one the CPU
-/// supports is chosen at run time.
+/// supports is chosen at run time. Only the portable kernel and those of the build's architecture are compiled
+/// (x86: popcnt, avx2, avx512vpopcntdq; AArch64: neon); the others are never supported.
 enum class HammingKernel
 {
   kPortable,         ///< plain C++ bit counting (SWAR), any CPU
   kPopcnt,           ///< the POPCNT instruction, one 64-bit word at a time
   kAvx2,             ///< AVX2 nibble lookup (vpshufb) with horizontal sums
   kAvx512Vpopcntdq,  ///< AVX-512 VPOPCNTDQ
+  kNeon,             ///< AArch64 NEON: per-byte counts (vcntq_u8) with pairwise widening sums
 };
 
 std::string kernelName(HammingKernel kernel);

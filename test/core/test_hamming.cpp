@@ -2,16 +2,32 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
 #include <string>
 #include <type_traits>
 
+#include "bit_oracle.h"
 #include "openable/error.h"
 #include "openable/hamming.h"
-#include "test_util.h"
 
 using namespace openable;
 using openable_test::naiveBitCount;
 using openable_test::randomWords;
+
+namespace
+{
+/// Every kernel the library knows, whichever architecture it was built for.
+const std::vector<HammingKernel> kAllKernels = {HammingKernel::kPortable, HammingKernel::kPopcnt, HammingKernel::kAvx2,
+                                                HammingKernel::kAvx512Vpopcntdq, HammingKernel::kNeon};
+
+bool isSupported(HammingKernel kernel)
+{
+  const auto kernels = supportedKernels();
+  return std::find(kernels.begin(), kernels.end(), kernel) != kernels.end();
+}
+}  // namespace
 
 TEST(Hamming, EveryKernelEqualsNaiveBitCountOnRandomDataOfManyLengths)
 {
@@ -33,6 +49,22 @@ TEST(Hamming, EveryKernelEqualsNaiveBitCountOnRandomDataOfManyLengths)
         ASSERT_EQ(hamming(k, a.data(), b.data(), words), expected) << kernelName(k) << " words=" << words;
       ASSERT_EQ(hamming(a.data(), b.data(), words), expected);
     }
+}
+
+// Long descriptors with every bit different: the largest sums, past any accumulator a kernel flushes (NEON's
+// 16-bit byte-count lanes every 4095 steps of two words).
+TEST(Hamming, EveryKernelCountsLongDescriptorsWithEveryBitDifferent)
+{
+  std::mt19937_64 rng(13);
+  for (size_t words : {8189u, 8190u, 8191u, 8192u, 20001u})
+  {
+    const auto a = randomWords(rng, words);
+    std::vector<uint64_t> b(words);
+    for (size_t i = 0; i < words; ++i)
+      b[i] = ~a[i];
+    for (HammingKernel k : supportedKernels())
+      ASSERT_EQ(hamming(k, a.data(), b.data(), words), 64u * words) << kernelName(k) << " words=" << words;
+  }
 }
 
 TEST(Hamming, RowKernelsEqualPairwiseDistancesWithStride)
@@ -182,25 +214,88 @@ TEST(Hamming, BestKernelIsTheLastSupportedAndPortableAlwaysExists)
   const auto kernels = supportedKernels();
   EXPECT_EQ(kernels.front(), HammingKernel::kPortable);
   EXPECT_EQ(bestKernel(), kernels.back());
-  for (HammingKernel k :
-       {HammingKernel::kPortable, HammingKernel::kPopcnt, HammingKernel::kAvx2, HammingKernel::kAvx512Vpopcntdq})
+  for (HammingKernel k : kAllKernels)
     EXPECT_FALSE(kernelName(k).empty());
 }
 
+// No CPU runs both the x86 and the AArch64 kernels, so every host has one to refuse.
 TEST(Hamming, UnsupportedKernelIsAClearError)
 {
-  const auto kernels = supportedKernels();
-  if (std::find(kernels.begin(), kernels.end(), HammingKernel::kAvx512Vpopcntdq) != kernels.end())
-    return;  // this CPU runs every kernel: nothing to refuse (the other tests cover all of them)
-  const uint64_t a = 1, b = 2;
-  try
+  size_t refused = 0;
+  for (HammingKernel k : kAllKernels)
   {
-    hamming(HammingKernel::kAvx512Vpopcntdq, &a, &b, 1);
-    FAIL() << "expected an error";
+    if (isSupported(k))
+      continue;
+    const uint64_t a = 1, b = 2;
+    try
+    {
+      hamming(k, &a, &b, 1);
+      ADD_FAILURE() << kernelName(k) << ": expected an error";
+    }
+    catch (const Error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("not supported"), std::string::npos) << e.what();
+    }
+    ++refused;
   }
-  catch (const Error& e)
+  EXPECT_GE(refused, 1u);
+}
+
+// Names the kernels this host ran (in the output and as the test's property "kernels_exercised"), each forced
+// through every entry point against the naive bit count. OPENABLE_EXPECT_HAMMING_KERNELS (names separated by
+// spaces) makes a kernel that should have run and did not a failure: the aarch64 cross check sets "neon".
+TEST(Hamming, KernelsExercisedAreNamedAndEachMatchesTheOracle)
+{
+  std::mt19937_64 rng(29);
+  const size_t words = 6, count = 19, L = 3;
+  const auto qa = randomWords(rng, words);
+  const auto qb = randomWords(rng, words);
+  const auto rows = randomWords(rng, words * count);
+  std::vector<uint32_t> to_a(count), to_b(count);
+  for (size_t i = 0; i < count; ++i)
   {
-    EXPECT_NE(std::string(e.what()).find("not supported"), std::string::npos);
+    to_a[i] = naiveBitCount(qa.data(), rows.data() + i * words, words);
+    to_b[i] = naiveBitCount(qb.data(), rows.data() + i * words, words);
+  }
+  std::string exercised;
+  for (HammingKernel k : supportedKernels())
+  {
+    const std::string name = kernelName(k);
+    EXPECT_EQ(hamming(k, qa.data(), rows.data(), words), to_a[0]) << name;
+    std::vector<uint32_t> row(count);
+    hammingRow(k, qa.data(), rows.data(), words, words, count, row.data());
+    EXPECT_EQ(row, to_a) << name;
+    std::vector<int32_t> difference(count);
+    hammingRowDifference(k, qa.data(), rows.data(), qb.data(), rows.data(), words, words, count, difference.data());
+    for (size_t i = 0; i < count; ++i)
+      EXPECT_EQ(difference[i], int32_t(to_a[i]) - int32_t(to_b[i])) << name << " row " << i;
+    // A chain step, 32- and 16-bit, with every old sum and the carry 1000 and the caller's L leaving terms 0.
+    const auto checkStep = [&](auto zero)
+    {
+      using Sum = decltype(zero);
+      std::vector<Sum> sums(count, 1000), leaving(count + L, 0);
+      hammingChainStep(k, qa.data(), qb.data(), rows.data(), words, words, count, L, 1000, sums.data(), leaving.data());
+      for (size_t i = 0; i < count; ++i)
+      {
+        EXPECT_EQ(sums[i], 1000 + to_a[i] - (i < L ? 0 : to_b[i - L])) << name << " column " << i << " " << sizeof(Sum);
+        EXPECT_EQ(leaving[i + L], to_b[i]) << name << " column " << i << " " << sizeof(Sum);
+      }
+    };
+    checkStep(uint32_t(0));
+    checkStep(uint16_t(0));
+    exercised += (exercised.empty() ? "" : " ") + name;
+  }
+  std::cout << "Hamming kernels exercised: " << exercised << std::endl;
+  RecordProperty("kernels_exercised", exercised);
+
+  const char* expected = std::getenv("OPENABLE_EXPECT_HAMMING_KERNELS");
+  std::istringstream names(expected ? expected : "");
+  for (std::string name; names >> name;)
+  {
+    const bool ran = std::any_of(kAllKernels.begin(), kAllKernels.end(),
+                                 [&](HammingKernel k) { return kernelName(k) == name && isSupported(k); });
+    EXPECT_TRUE(ran) << "kernel " << name
+                     << " was expected (OPENABLE_EXPECT_HAMMING_KERNELS) but did not run; ran: " << exercised;
   }
 }
 

@@ -1,105 +1,22 @@
-#include "openable/hamming.h"
+// The AVX-512 VPOPCNTDQ Hamming kernel (x86 only; on other architectures this file compiles to nothing): the
+// pair distance, rows of small descriptors eight at a time (VBMI), fused row differences and chain steps.
+// Every function carries GCC's target attribute for the instructions it uses, so the library builds for any
+// x86-64 and hamming.cpp picks this kernel only on CPUs that support it.
+#if defined(__x86_64__) || defined(__i386__)
 
 #include <immintrin.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 
-#include "openable/error.h"
-
-// Each kernel is compiled for its own instruction set with GCC's target attribute, so the package builds
-// for any x86-64 (no -march=native) and picks the fastest kernel the running CPU supports.
+#include "hamming_kernels.h"
 
 namespace openable
 {
+namespace hamming_kernels
+{
 namespace
 {
-// ---------------------------------------------------------------------------------------------- portable
-inline uint32_t popcountPortable(uint64_t x)
-{
-  // SWAR bit count: pairs, nibbles, bytes, then one multiply sums the bytes.
-  x = x - ((x >> 1) & 0x5555555555555555ULL);
-  x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
-  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0FULL;
-  return static_cast<uint32_t>((x * 0x0101010101010101ULL) >> 56);
-}
-
-uint32_t pairPortable(const uint64_t* a, const uint64_t* b, size_t words)
-{
-  uint32_t sum = 0;
-  for (size_t i = 0; i < words; ++i)
-    sum += popcountPortable(a[i] ^ b[i]);
-  return sum;
-}
-
-void rowPortable(const uint64_t* q, const uint64_t* rows, size_t stride, size_t words, size_t count, uint32_t* out)
-{
-  for (size_t i = 0; i < count; ++i)
-    out[i] = pairPortable(q, rows + i * stride, words);
-}
-
-#if defined(__x86_64__) || defined(__i386__)
-#define OPENABLE_X86 1
-// ---------------------------------------------------------------------------------------------- popcnt
-__attribute__((target("popcnt"))) inline uint32_t pairPopcntInline(const uint64_t* a, const uint64_t* b, size_t words)
-{
-  uint64_t sum = 0;
-  for (size_t i = 0; i < words; ++i)
-    sum += static_cast<uint64_t>(_mm_popcnt_u64(a[i] ^ b[i]));
-  return static_cast<uint32_t>(sum);
-}
-
-__attribute__((target("popcnt"))) uint32_t pairPopcnt(const uint64_t* a, const uint64_t* b, size_t words)
-{
-  return pairPopcntInline(a, b, words);
-}
-
-__attribute__((target("popcnt"))) void rowPopcnt(const uint64_t* q, const uint64_t* rows, size_t stride, size_t words,
-                                                 size_t count, uint32_t* out)
-{
-  for (size_t i = 0; i < count; ++i)
-    out[i] = pairPopcntInline(q, rows + i * stride, words);
-}
-
-// ---------------------------------------------------------------------------------------------- AVX2
-// Bit count of every byte by two 4-bit table lookups (vpshufb), summed per 64-bit lane with vpsadbw.
-__attribute__((target("avx2,popcnt"))) inline uint32_t pairAvx2Inline(const uint64_t* a, const uint64_t* b,
-                                                                      size_t words)
-{
-  const __m256i table =
-      _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
-  const __m256i low_mask = _mm256_set1_epi8(0x0f);
-  __m256i total = _mm256_setzero_si256();
-  size_t i = 0;
-  for (; i + 4 <= words; i += 4)
-  {
-    const __m256i x = _mm256_xor_si256(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + i)),
-                                       _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + i)));
-    const __m256i lo = _mm256_shuffle_epi8(table, _mm256_and_si256(x, low_mask));
-    const __m256i hi = _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(x, 4), low_mask));
-    total = _mm256_add_epi64(total, _mm256_sad_epu8(_mm256_add_epi8(lo, hi), _mm256_setzero_si256()));
-  }
-  uint64_t sum = static_cast<uint64_t>(_mm256_extract_epi64(total, 0)) + _mm256_extract_epi64(total, 1) +
-                 _mm256_extract_epi64(total, 2) + _mm256_extract_epi64(total, 3);
-  for (; i < words; ++i)
-    sum += static_cast<uint64_t>(_mm_popcnt_u64(a[i] ^ b[i]));
-  return static_cast<uint32_t>(sum);
-}
-
-__attribute__((target("avx2,popcnt"))) uint32_t pairAvx2(const uint64_t* a, const uint64_t* b, size_t words)
-{
-  return pairAvx2Inline(a, b, words);
-}
-
-__attribute__((target("avx2,popcnt"))) void rowAvx2(const uint64_t* q, const uint64_t* rows, size_t stride,
-                                                    size_t words, size_t count, uint32_t* out)
-{
-  for (size_t i = 0; i < count; ++i)
-    out[i] = pairAvx2Inline(q, rows + i * stride, words);
-}
-
-// ---------------------------------------------------------------------------------------------- AVX-512
 // GCC 12's own avx512fintrin.h trips -Wuninitialized inside its reduction helpers (a known false positive).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wuninitialized"
@@ -503,66 +420,7 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowDifferenceAvx512(cons
   }
 }
 #pragma GCC diagnostic pop
-#endif
 
-using PairFn = uint32_t (*)(const uint64_t*, const uint64_t*, size_t);
-using RowFn = void (*)(const uint64_t*, const uint64_t*, size_t, size_t, size_t, uint32_t*);
-using RowDifferenceFn = void (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t,
-                                 size_t, int32_t*);
-
-/// The difference of two rows through a kernel's pair function (the kernels without a fused one).
-template <PairFn pair>
-void rowDifferenceOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                     size_t stride, size_t words, size_t count, int32_t* out)
-{
-  for (size_t i = 0; i < count; ++i)
-    out[i] = int32_t(pair(qa, rows_a + i * stride, words)) - int32_t(pair(qb, rows_b + i * stride, words));
-}
-
-/// out_a[i] and out_b[i]: the distances of row i to qa and to qb (the chain step's entering and leaving terms).
-using RowPairFn = void (*)(const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t, size_t, uint32_t*,
-                           uint32_t*);
-
-/// Both rows of distances through a kernel's row function, one after the other (the rows stay in cache).
-template <RowFn row>
-void rowPairOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words, size_t count,
-               uint32_t* out_a, uint32_t* out_b)
-{
-  row(qa, rows, stride, words, count, out_a);
-  row(qb, rows, stride, words, count, out_b);
-}
-
-template <typename Sum>
-using ChainStepFn = uint32_t (*)(const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t, size_t, size_t,
-                                 uint32_t, Sum*, Sum*);
-
-/// A chain step through a kernel's row pair function, a block of columns at a time.
-template <RowPairFn row_pair, typename Sum>
-uint32_t chainStepOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
-                     size_t count, size_t L, uint32_t carry, Sum* sums, Sum* leaving)
-{
-  constexpr size_t kBlock = 64;
-  uint32_t entering[kBlock], dropped[kBlock];
-  uint32_t smallest = UINT32_MAX;
-  Sum before = static_cast<Sum>(carry);
-  for (size_t begin = 0; begin < count; begin += kBlock)
-  {
-    const size_t n = std::min(kBlock, count - begin);
-    row_pair(qa, qb, rows + begin * stride, stride, words, n, entering, dropped);
-    // Stored before the loop below reads: for L < n some terms leave within this block.
-    std::copy(dropped, dropped + n, leaving + begin + L);
-    for (size_t i = 0; i < n; ++i)
-    {
-      const Sum old = sums[begin + i];
-      sums[begin + i] = static_cast<Sum>(before + entering[i] - leaving[begin + i]);
-      smallest = std::min<uint32_t>(smallest, sums[begin + i]);
-      before = old;
-    }
-  }
-  return smallest;
-}
-
-#ifdef OPENABLE_X86
 template <typename Sum>
 uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
                          size_t count, size_t L, uint32_t carry, Sum* sums, Sum* leaving)
@@ -584,156 +442,14 @@ uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* qb, const uint64_t*
   }
   return chainStepOf<rowPairAvx512, Sum>(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
 }
-#endif
-
-struct Kernel
-{
-  PairFn pair;
-  RowFn row;
-  RowDifferenceFn difference;
-  ChainStepFn<uint32_t> step;
-  ChainStepFn<uint16_t> step16;
-};
-
-Kernel kernelFor(HammingKernel kernel)
-{
-  switch (kernel)
-  {
-#ifdef OPENABLE_X86
-    case HammingKernel::kPopcnt:
-      return {pairPopcnt, rowPopcnt, rowDifferenceOf<pairPopcnt>, chainStepOf<rowPairOf<rowPopcnt>, uint32_t>,
-              chainStepOf<rowPairOf<rowPopcnt>, uint16_t>};
-    case HammingKernel::kAvx2:
-      return {pairAvx2, rowAvx2, rowDifferenceOf<pairAvx2>, chainStepOf<rowPairOf<rowAvx2>, uint32_t>,
-              chainStepOf<rowPairOf<rowAvx2>, uint16_t>};
-    case HammingKernel::kAvx512Vpopcntdq:
-      return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>, chainStepAvx512<uint16_t>};
-#endif
-    default:
-      return {pairPortable, rowPortable, rowDifferenceOf<pairPortable>, chainStepOf<rowPairOf<rowPortable>, uint32_t>,
-              chainStepOf<rowPairOf<rowPortable>, uint16_t>};
-  }
-}
-
-Kernel checkedKernel(HammingKernel kernel)
-{
-  for (HammingKernel k : supportedKernels())
-    if (k == kernel)
-      return kernelFor(kernel);
-  throw Error("Hamming kernel " + kernelName(kernel) + " is not supported by this CPU");
-}
-
-const Kernel& best()
-{
-  static const Kernel kernel = kernelFor(bestKernel());
-  return kernel;
-}
 }  // namespace
 
-std::string kernelName(HammingKernel kernel)
+Kernel avx512Kernel()
 {
-  switch (kernel)
-  {
-    case HammingKernel::kPortable:
-      return "portable";
-    case HammingKernel::kPopcnt:
-      return "popcnt";
-    case HammingKernel::kAvx2:
-      return "avx2";
-    case HammingKernel::kAvx512Vpopcntdq:
-      return "avx512vpopcntdq";
-  }
-  return "unknown";
+  return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>, chainStepAvx512<uint16_t>};
 }
 
-std::vector<HammingKernel> supportedKernels()
-{
-  std::vector<HammingKernel> kernels = {HammingKernel::kPortable};
-#ifdef OPENABLE_X86
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("popcnt"))
-    kernels.push_back(HammingKernel::kPopcnt);
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt"))
-    kernels.push_back(HammingKernel::kAvx2);
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vpopcntdq"))
-    kernels.push_back(HammingKernel::kAvx512Vpopcntdq);
-#endif
-  return kernels;
-}
-
-HammingKernel bestKernel()
-{
-  return supportedKernels().back();
-}
-
-uint32_t hamming(const uint64_t* a, const uint64_t* b, size_t words)
-{
-  return best().pair(a, b, words);
-}
-
-uint32_t hamming(HammingKernel kernel, const uint64_t* a, const uint64_t* b, size_t words)
-{
-  return checkedKernel(kernel).pair(a, b, words);
-}
-
-void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size_t words, size_t count, uint32_t* out)
-{
-  best().row(query, rows, stride, words, count, out);
-}
-
-void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* rows, size_t stride, size_t words,
-                size_t count, uint32_t* out)
-{
-  checkedKernel(kernel).row(query, rows, stride, words, count, out);
-}
-
-void hammingRowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
-                          size_t stride, size_t words, size_t count, int32_t* out)
-{
-  best().difference(qa, rows_a, qb, rows_b, stride, words, count, out);
-}
-
-void hammingRowDifference(HammingKernel kernel, const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb,
-                          const uint64_t* rows_b, size_t stride, size_t words, size_t count, int32_t* out)
-{
-  checkedKernel(kernel).difference(qa, rows_a, qb, rows_b, stride, words, count, out);
-}
-
-uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
-                          size_t count, size_t L, uint32_t carry, uint32_t* sums, uint32_t* leaving)
-{
-  return best().step(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
-}
-
-uint32_t hammingChainStep(const uint64_t* qa, const uint64_t* qb, const uint64_t* rows, size_t stride, size_t words,
-                          size_t count, size_t L, uint32_t carry, uint16_t* sums, uint16_t* leaving)
-{
-  return best().step16(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
-}
-
-uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* qb, const uint64_t* rows,
-                          size_t stride, size_t words, size_t count, size_t L, uint32_t carry, uint32_t* sums,
-                          uint32_t* leaving)
-{
-  return checkedKernel(kernel).step(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
-}
-
-uint32_t hammingChainStep(HammingKernel kernel, const uint64_t* qa, const uint64_t* qb, const uint64_t* rows,
-                          size_t stride, size_t words, size_t count, size_t L, uint32_t carry, uint16_t* sums,
-                          uint16_t* leaving)
-{
-  return checkedKernel(kernel).step16(qa, qb, rows, stride, words, count, L, carry, sums, leaving);
-}
-
-float l2Distance(const float* a, const float* b, size_t length)
-{
-  double sum = 0.0;
-  for (size_t i = 0; i < length; ++i)
-  {
-    const double d = double(a[i]) - double(b[i]);
-    sum += d * d;
-  }
-  return static_cast<float>(std::sqrt(sum));
-}
-
+}  // namespace hamming_kernels
 }  // namespace openable
+
+#endif  // x86
