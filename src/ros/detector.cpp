@@ -260,7 +260,17 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
   ++counters_.statuses[openable::toString(outcome.status)];
   if (!outcome.stored)
   {
+    // Not a keyframe, or the camera stands still: nothing is stored, but the frame has its decision (a
+    // standstill repeats the last one, a loop closure included, stamped with this frame), as offline.
     ++counters_.skipped_keyframe;
+    const LoopClosurePtr msg = makeLoopClosure(header, outcome);
+    if (decisions_pub_.getNumSubscribers() > 0)
+      decisions_pub_.publish(LoopClosureConstPtr(msg));
+    if (outcome.published())
+    {
+      ++counters_.loops;
+      loop_pub_.publish(LoopClosureConstPtr(msg));
+    }
     return;
   }
   counters_.addTimes(outcome.times);
