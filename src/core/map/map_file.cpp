@@ -1,5 +1,6 @@
 #include "map_file.h"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +9,7 @@
 #include "openable/atomic_file.h"
 #include "openable/config.h"
 #include "openable/error.h"
+#include "openable/input_contract.h"
 
 namespace fs = std::filesystem;
 
@@ -226,6 +228,13 @@ PlaceDatabase getFrames(Reader& r, uint32_t version, const DescriptorLayout& lay
       for (double& v : info.pose)
         v = r.get<double>("pose");
     info.source = r.getString("source name", kMaxNameBytes);
+    // The input contract holds for what a file brings too (poses a backend would receive, stamps).
+    const InputProblem pose = info.has_pose ? checkPose(info.pose) : InputProblem();
+    if (!pose.ok())
+      throw Error("map file '" + path + "' is corrupt (frame " + std::to_string(first_id + i) + ": " + pose.what + ")");
+    if (!std::isfinite(info.stamp) || info.stamp < 0.0)
+      throw Error("map file '" + path + "' is corrupt (frame " + std::to_string(first_id + i) + ": stamp " +
+                  std::to_string(info.stamp) + "; expected finite seconds >= 0)");
   }
   PlaceDatabase db(layout, capacity, config_yaml);
   db.renumber(first_id);
