@@ -123,7 +123,8 @@ public:
     return refused_;
   }
 
-  /// Saves every session (SessionMap format). Throws Error.
+  /// Saves every session (SessionMap format). Throws Error, also for a map without any frame (the detectors
+  /// refuse an empty map: it is not written).
   void save(const std::string& path) const;
   /// Replaces the map with a saved one described with the same configuration (else Error naming the keys
   /// that differ; the map in memory is kept). Query streams restart.

@@ -338,3 +338,18 @@ TEST(InputContract, PlaceServerRefusesRepeatsIdsGoingBackAndForeignRobotNames)
   EXPECT_TRUE(server.process(own).stored);
   EXPECT_EQ(robotOfTopic("/fleet/r2/place_descriptors"), "fleet_r2");
 }
+
+// ---- finding 6 (the small ones) ----------------------------------------------------------------------------
+
+TEST(InputContract, AnEmptyPlaceServerSavesNoMapItsDetectorsWouldRefuse)
+{
+  const Config config = shipped("gardens_point");
+  PlaceServer server(config);
+  const std::string path = tempPath("empty_server.map");
+  std::filesystem::remove(path);
+  EXPECT_THROW(server.save(path), Error);
+  EXPECT_FALSE(std::filesystem::exists(path));
+  server.process(place("r1", 0, 10.0, config));
+  server.save(path);
+  EXPECT_EQ(SessionMap::load(path).frameCount(), 1u);
+}

@@ -224,6 +224,9 @@ ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
 
 void PlaceServer::save(const std::string& path) const
 {
+  if (map_.frameCount() == 0)
+    throw Error("the map holds no frame (" + std::to_string(map_.sessionCount()) + " sessions): nothing saved to '" +
+                path + "' (the detectors refuse an empty map)");
   map_.save(path);
 }
 
