@@ -27,8 +27,10 @@ InputProblem checkPose(Pose& pose)
   if (norm < 1e-9)
     return {"zero quaternion", "the pose's quaternion qx qy qz qw is zero; expected a unit quaternion (a rotation)"};
   if (std::fabs(norm - 1.0) > kQuaternionTolerance)
-    return {"quaternion not unit", "the pose's quaternion has norm " + number(norm) + "; expected a unit quaternion "
-                                   "(norm within " + number(kQuaternionTolerance) + " of 1)"};
+    return {"quaternion not unit", "the pose's quaternion has norm " + number(norm) +
+                                       "; expected a unit quaternion "
+                                       "(norm within " +
+                                       number(kQuaternionTolerance) + " of 1)"};
   for (size_t i = 3; i < 7; ++i)
     pose[i] /= norm;
   return {};
@@ -53,8 +55,9 @@ InputProblem checkStamp(double stamp, double previous, bool stream_has_stamps, b
     return {"stamp 0", "stamp 0 (unset) after stamped frames (previous " + number(previous) +
                            "); expected every frame of a stamped stream stamped"};
   if (stamp == 0.0 && require_stamps)
-    return {"stamp 0", "stamp 0 (unset); expected every frame stamped (a driver or bag that leaves "
-                       "header.stamp unset?)"};
+    return {"stamp 0",
+            "stamp 0 (unset); expected every frame stamped (a driver or bag that leaves "
+            "header.stamp unset?)"};
   if (stream_has_stamps && stamp < previous)
     return {"stamp went backwards", "stamp " + number(stamp) + " is before the previous frame's " + number(previous)};
   return {};

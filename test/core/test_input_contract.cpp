@@ -113,8 +113,8 @@ TEST(InputContract, PlaceServerRefusesNaNInfAndZeroQuaternionPoses)
   const Config config = shipped("gardens_point");
   PlaceServer server(config);
   double stamp = 1000.0;
-  for (const Pose& bad : {Pose{{kNaN, 0, 0, 0, 0, 0, 1}}, Pose{{0, kInf, 0, 0, 0, 0, 1}},
-                          Pose{{0, 0, 0, 0, 0, 0, 0}}, Pose{{0, 0, 0, kNaN, 0, 0, 1}}})
+  for (const Pose& bad : {Pose{{kNaN, 0, 0, 0, 0, 0, 1}}, Pose{{0, kInf, 0, 0, 0, 0, 1}}, Pose{{0, 0, 0, 0, 0, 0, 0}},
+                          Pose{{0, 0, 0, kNaN, 0, 0, 1}}})
   {
     PlaceDescriptorInput in = place("r1", 0, stamp += 1.0, config);
     in.has_pose = true;

@@ -53,10 +53,13 @@ TEST(MapCost, AThousandEmptySessionsLoadInProportionToTheFile)
   const std::string bytes = openable_test::emptySessionsMap(1000);
   EXPECT_LT(bytes.size(), 64u * 1024u);
   const std::string path = writeTemp("thousand.map", bytes);
-  const openable_test::LimitedRun run = openable_test::runWithMemoryLimit(kHundredMegabytes, [&] {
-    if (SessionMap::load(path).sessionCount() != 1000)
-      throw Error("not 1000 sessions");
-  });
+  const openable_test::LimitedRun run =
+      openable_test::runWithMemoryLimit(kHundredMegabytes,
+                                        [&]
+                                        {
+                                          if (SessionMap::load(path).sessionCount() != 1000)
+                                            throw Error("not 1000 sessions");
+                                        });
   EXPECT_EQ(run.outcome, openable_test::LimitedRun::kReturned) << run.message;
   EXPECT_LT(secondsToLoad(path), 1.0);
 }
@@ -73,7 +76,8 @@ TEST(MapCost, SessionsAndLayoutWordsAreCappedWithAClearMessage)
   {
     EXPECT_NE(std::string(e.what()).find("declares 20000 sessions; at most 16384"), std::string::npos) << e.what();
   }
-  const std::string wide = writeTemp("wide.map", openable_test::emptySessionsMap(1, 762601));  // 2^24 + 22 words a frame
+  const std::string wide =
+      writeTemp("wide.map", openable_test::emptySessionsMap(1, 762601));  // 2^24 + 22 words a frame
   try
   {
     SessionMap::load(wide);
@@ -94,7 +98,8 @@ TEST(MapCost, ThePlaceServerRefusesSuchAMapWithinASecond)
   const auto start = std::chrono::steady_clock::now();
   EXPECT_THROW(server.load(path), Error);
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 1.0);
-  const openable_test::LimitedRun run = openable_test::runWithMemoryLimit(kHundredMegabytes, [&] { server.load(path); });
+  const openable_test::LimitedRun run =
+      openable_test::runWithMemoryLimit(kHundredMegabytes, [&] { server.load(path); });
   EXPECT_EQ(run.outcome, openable_test::LimitedRun::kOpenableError) << run.message;
   EXPECT_NE(run.message.find("layout differs"), std::string::npos) << run.message;
   EXPECT_EQ(server.map().sessionCount(), 0u);
