@@ -26,8 +26,14 @@ public:
 
   /// Reads the next frame into `image` and names it in `name` (file name, or "frame_N" for videos).
   /// Returns false at the end. An unreadable file gives an empty image with its name: the caller reports
-  /// and skips it.
+  /// and skips it (problem() says why). A truncated JPEG (no end-of-image marker after its last scan),
+  /// which a decoder would fill up with grey, is unreadable: it is not a frame.
   bool next(cv::Mat& image, std::string& name);
+  /// Why the last next() gave an empty image ("" when it gave one).
+  const std::string& problem() const
+  {
+    return problem_;
+  }
 
   /// Image file names of a folder, in reading order (empty for a video).
   const std::vector<std::string>& files() const
@@ -49,6 +55,7 @@ private:
   std::string path_;
   std::vector<std::string> files_;
   size_t next_index_ = 0;
+  std::string problem_;
   struct Video;
   std::unique_ptr<Video> video_;
 };

@@ -45,6 +45,9 @@ struct OnlineOptions
   bool verify_required = true;     ///< true: a candidate that cannot be verified is not published (Unverified)
                                    ///< (the verifier's tunables are the configuration's verify_* keys)
   size_t feature_bytes = 256u << 20;  ///< memory bound of the features kept for verification
+  /// Every frame must carry a stamp (the nodelets: a ROS header stamp of 0 is unset). Without it a stream
+  /// whose first frame is stamped 0 has no stamps (a folder of images); stamped streams refuse 0 anyway.
+  bool require_stamps = false;
 };
 
 /// Wall time of each stage of one frame (milliseconds).
@@ -98,11 +101,15 @@ public:
                  const OnlineOptions& options = OnlineOptions());
 
   /// Describes, stores, matches and decides. Bad images throw Error / cv::Exception before anything is
-  /// stored, so a caller can report and carry on.
+  /// stored, so a caller can report and carry on; what the input contract refuses (input_contract.h: a
+  /// non-finite, negative or 0 stamp in a stamped stream, a non-finite pose or non-unit quaternion, an image
+  /// below kMinImageSide a side, a constant frame) throws FrameRefused with its reason. A stamp before the
+  /// previous one is not thrown: it comes back as FrameStatus::TimeJump (a caller may reset on it).
   FrameOutcome process(const FrameInput& input);
 
   /// The input's descriptor as the configuration says: stereo D-LDB from `disparity` or from the pair
-  /// (SGBM), a ring from `cameras`, otherwise `image`. Throws Error naming what is missing.
+  /// (SGBM), a ring from `cameras`, otherwise `image`. Throws Error naming what is missing, FrameRefused for
+  /// an image too small or a constant frame.
   FrameDescriptor describe(const FrameInput& input) const;
 
   /// The camera for verification (rectified intrinsics; a baseline makes it stereo). The first valid one
@@ -146,6 +153,8 @@ public:
 
 private:
   std::vector<Patch> patches(const FrameInput& input) const;
+  /// patches() of a frame that may become a place: refuses a constant frame (FrameRefused).
+  std::vector<Patch> placePatches(const FrameInput& input) const;
   bool isKeyframe(const FrameInput& input);
   /// The camera stands still: the frame is textured and its descriptor within standstill_distance of the last
   /// stored frame's (a textureless frame, e.g. a tunnel, says nothing about motion and is matched as usual).

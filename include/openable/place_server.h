@@ -8,6 +8,7 @@
 
 #include "openable/config.h"
 #include "openable/error.h"
+#include "openable/input_contract.h"
 #include "openable/map_matcher.h"
 #include "openable/session_map.h"
 
@@ -17,30 +18,31 @@ namespace openable
 struct PlaceDescriptorInput
 {
   std::string robot;    ///< who sent it (for warnings and the session table)
+  /// The robot the message's topic belongs to (robotOfTopic), when the caller knows it: a message whose
+  /// `robot` differs is refused. Empty: not checked.
+  std::string topic_robot;
   std::string session;  ///< the stream it belongs to: one per robot run ("robot1", "robot1/2026-11-22")
-  uint64_t frame_id = 0;     ///< the robot's own id of the frame (reported back, not used for matching)
-  double stamp = 0.0;        ///< seconds; must not go back within a session
+  uint64_t frame_id = 0;     ///< the robot's own id of the frame: strictly increasing within a session
+  double stamp = 0.0;        ///< seconds, finite and > 0; strictly increasing within a session
   uint64_t config_hash = 0;  ///< descriptorHash() of the configuration the robot described with
   FrameDescriptor descriptor;
   bool has_pose = false;
-  std::array<double, 7> pose{{0, 0, 0, 0, 0, 0, 1}};  ///< x y z qx qy qz qw
+  std::array<double, 7> pose{{0, 0, 0, 0, 0, 0, 1}};  ///< x y z qx qy qz qw (finite, unit quaternion)
 };
 
-/// A descriptor the server will not use, and why. Nothing was stored or matched.
-class DescriptorRefused : public Error
+/// A descriptor the server will not use, and why. Nothing was stored or matched. `reason` is a short key
+/// for counting ("configuration hash", "length", "no session name", "robot name", the stamp reasons of
+/// checkStamp, "stamp repeated", "repeated message", "frame id went backwards", the pose reasons of
+/// checkPose); `what` names the robot, the value and what was expected.
+class DescriptorRefused : public InputRefused
 {
 public:
-  /// `reason` is a short key for counting ("configuration hash", "length", "stamp went backwards",
-  /// "no session name"); `what` names the robot, the value and what was expected.
-  DescriptorRefused(std::string reason, const std::string& what) : Error(what), reason_(std::move(reason)) {}
-  const std::string& reason() const
-  {
-    return reason_;
-  }
-
-private:
-  std::string reason_;
+  using InputRefused::InputRefused;
 };
+
+/// The robot a place_descriptors topic belongs to, as a detector in that namespace names itself by default:
+/// "/robot1" and "/robot1/place_descriptors" -> "robot1", "/fleet/r2" -> "fleet_r2".
+std::string robotOfTopic(const std::string& topic);
 
 /// One matched place, named so that it means the same on every server: session name and the id of the
 /// frame within that session (every server numbers a session's frames from 0).
@@ -90,8 +92,11 @@ public:
   PlaceServer(const Config& config, std::vector<std::string> owned = {}, std::string name = "place_server");
 
   /// Validates, matches, stores (if owned) and returns the candidates. Throws DescriptorRefused (nothing
-  /// changes) for a wrong configuration hash or length, an empty session name, or a stamp before the
-  /// previous one of the same session.
+  /// changes) for a wrong configuration hash or length, an empty session name, a robot name that is not its
+  /// topic's, a stamp that is not finite, 0, or not after the previous one of the same session, a frame id
+  /// not after the previous one (the same message twice: "repeated message"), or a pose that is not finite
+  /// or whose quaternion is not a unit one (a near-unit one is normalised). A session never restarts: a
+  /// robot whose stamps start over (a restart, a bag played in a loop) must send a new session name.
   ServerCandidates process(const PlaceDescriptorInput& input);
 
   /// True when this server stores the frames of `session`.
@@ -118,7 +123,8 @@ public:
     return refused_;
   }
 
-  /// Saves every session (SessionMap format). Throws Error.
+  /// Saves every session (SessionMap format). Throws Error, also for a map without any frame (the detectors
+  /// refuse an empty map: it is not written).
   void save(const std::string& path) const;
   /// Replaces the map with a saved one described with the same configuration (else Error naming the keys
   /// that differ; the map in memory is kept). Query streams restart.
@@ -130,8 +136,11 @@ private:
     MapMatcher matcher;
     double last_stamp = 0.0;
     bool started = false;
+    bool has_frame_id = false;  ///< false for a session continued from a loaded map (ids unknown)
+    uint64_t last_frame_id = 0;
   };
-  void check(const PlaceDescriptorInput& input) const;
+  /// Throws DescriptorRefused; returns the pose to store (normalised).
+  std::array<double, 7> check(const PlaceDescriptorInput& input) const;
   Stream& stream(const std::string& session);
   bool ownExcluded(const PlaceDatabase& frames, double stamp) const;
   ServerCandidate named(const Candidate& c) const;

@@ -25,7 +25,8 @@ struct PoseFile
 /// Reads a KITTI or TUM trajectory; the format is the first pose line's (12 or 8 numbers) and every other
 /// line must match it. Throws Error naming the file and line (and what was expected) for a line of
 /// another length or with a word that is not a number, a non-finite number, a KITTI rotation that is not
-/// one, a zero TUM quaternion, TUM stamps below 0 or going backwards, or a file without any pose.
+/// one, a zero TUM quaternion or one whose norm is not within kQuaternionTolerance of 1 (input_contract.h;
+/// near-unit ones are normalised), TUM stamps below 0 or going backwards, or a file without any pose.
 PoseFile readPoseFile(const std::string& path);
 
 /// The pose of a KITTI [R|t] as x y z qx qy qz qw (R -> unit quaternion, qw >= 0).

@@ -31,7 +31,8 @@ public:
 
 private:
   PlaceServerHost(ros::NodeHandle nh, ros::NodeHandle pnh, std::string name);
-  void descriptorCallback(const PlaceDescriptorConstPtr& msg, const std::string& topic);
+  /// `robot`: the robot of the topic (openable::robotOfTopic), empty when the topic carries every robot.
+  void descriptorCallback(const PlaceDescriptorConstPtr& msg, const std::string& topic, const std::string& robot);
   bool save(SaveMap::Request& request, SaveMap::Response& response);
   bool load(LoadMap::Request& request, LoadMap::Response& response);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);

@@ -47,6 +47,41 @@ size_t countDecodableFrames(const std::string& path)
     ++frames;
   return frames;
 }
+bool isJpeg(const std::string& bytes)
+{
+  return bytes.size() >= 3 && uint8_t(bytes[0]) == 0xFF && uint8_t(bytes[1]) == 0xD8 && uint8_t(bytes[2]) == 0xFF;
+}
+
+/// A JPEG ends its last scan (SOS, FF DA) with an end-of-image marker (FF D9). Inside a scan an FF byte is
+/// always followed by 00 or a restart marker, so an FF D9 after the last SOS is the image's end; a file cut
+/// short has none (libjpeg then warns "premature end" and fills the rest with grey). An EXIF thumbnail's own
+/// markers come before the main image's last SOS.
+bool jpegComplete(const std::string& bytes)
+{
+  const size_t sos = bytes.rfind("\xFF\xDA");
+  if (sos == std::string::npos)
+    return false;
+  return bytes.find("\xFF\xD9", sos + 2) != std::string::npos;
+}
+
+/// The image of a file, or empty with `problem` saying why (unreadable, truncated JPEG, undecodable).
+cv::Mat readImageFile(const std::string& path, std::string& problem)
+{
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  problem.clear();
+  if (bytes.empty())
+    problem = "cannot read '" + path + "' (unreadable or empty)";
+  else if (isJpeg(bytes) && !jpegComplete(bytes))
+    problem = "'" + path + "' is a truncated JPEG (no end-of-image marker after its last scan); expected a "
+              "complete file";
+  if (!problem.empty())
+    return cv::Mat();
+  cv::Mat image = cv::imdecode(cv::Mat(1, int(bytes.size()), CV_8U, const_cast<char*>(bytes.data())), cv::IMREAD_COLOR);
+  if (image.empty())
+    problem = "cannot decode '" + path + "' as an image";
+  return image;
+}
 }  // namespace
 
 ImageSource::ImageSource(const std::string& path) : path_(path)
@@ -91,6 +126,7 @@ bool ImageSource::next(cv::Mat& image, std::string& name)
   if (video_)
   {
     // Never more than size(): callers allocate by it.
+    problem_.clear();
     if (video_->read >= video_->frames || !video_->capture.read(image) || image.empty())
       return false;
     name = "frame_" + std::to_string(video_->read++);
@@ -99,7 +135,8 @@ bool ImageSource::next(cv::Mat& image, std::string& name)
   if (next_index_ >= files_.size())
     return false;
   name = files_[next_index_++];
-  image = cv::imread((fs::path(path_) / name).string(), cv::IMREAD_COLOR);
+  const std::string file = (fs::path(path_) / name).string();
+  image = readImageFile(file, problem_);
   return true;
 }
 

@@ -1,5 +1,6 @@
 #include "openable/loop_list.h"
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -35,6 +36,10 @@ std::string lineError(const std::string& path, int number, const std::string& li
 
 std::vector<LoopPair> loadLoopPairs(const std::string& path)
 {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw Error("loop closures: '" + path + "' is a folder; expected a file (loop_closures.csv, which "
+                "openable_offline writes into its --output folder, or 'i j' pairs)");
   std::ifstream in(path);
   if (!in)
     throw Error("loop closures: cannot read '" + path + "'");

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "openable/error.h"
+#include "openable/input_contract.h"
 #include "openable/stereo.h"
 
 namespace openable
@@ -97,9 +98,20 @@ std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
 {
   const Preprocessor& pre = describer_.preprocessor();
   if (config_.camera_type == "panoramic" && !input.cameras.empty())
+  {
+    for (size_t i = 0; i < input.cameras.size(); ++i)
+    {
+      const InputProblem size = checkImageSize(input.cameras[i].cols, input.cameras[i].rows);
+      if (!size.ok() && !input.cameras[i].empty())
+        throw FrameRefused(size.reason, "camera " + std::to_string(i) + " of the ring: " + size.what);
+    }
     return pre.patchesFromCameras(input.cameras);
+  }
   if (input.image.empty())
     throw Error("empty image; expected an 8-bit grey, BGR or BGRA image");
+  const InputProblem size = checkImageSize(input.image.cols, input.image.rows);
+  if (!size.ok())
+    throw FrameRefused(size.reason, size.what);
   if (config_.descriptor != "D-LDB")
     return pre.patches(input.image);  // stereo with a mono descriptor: the left image only, no SGBM cost
   if (!input.disparity.empty())
@@ -109,9 +121,18 @@ std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
   return pre.patchesWithDisparity(input.image, disparityFromPair(input.image, input.right, config_));
 }
 
+std::vector<Patch> OnlineDetector::placePatches(const FrameInput& input) const
+{
+  std::vector<Patch> cells = patches(input);
+  const InputProblem texture = checkTexture(cells, config_.illumination_invariance);
+  if (!texture.ok())
+    throw FrameRefused(texture.reason, texture.what);
+  return cells;
+}
+
 FrameDescriptor OnlineDetector::describe(const FrameInput& input) const
 {
-  return describer_.describe(patches(input));
+  return describer_.describe(placePatches(input));
 }
 
 bool OnlineDetector::isKeyframe(const FrameInput& input)
@@ -146,34 +167,48 @@ bool OnlineDetector::standsStill(const FrameDescriptor& descriptor, const std::v
                           static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
   if (distance > config_.standstill_distance)
     return false;
-  // Grey levels (0..255) of spread below which a patch shows nothing: a black tunnel frame is the same
-  // descriptor at any speed. The illumination-invariant image has another scale: not tested there.
-  constexpr double kMinTextureStdDev = 2.0;
-  if (config_.illumination_invariance)
-    return true;
-  for (const Patch& cell : cells)
-  {
-    cv::Scalar mean, deviation;
-    cv::meanStdDev(cell.intensity, mean, deviation);
-    if (deviation[0] >= kMinTextureStdDev)
-      return true;
-  }
-  return false;
+  // A black tunnel frame is the same descriptor at any speed (kMinTextureStdDev). The illumination-invariant
+  // image has another scale: not tested there.
+  return config_.illumination_invariance || textured(cells, kMinTextureStdDev);
 }
 
-FrameOutcome OnlineDetector::process(const FrameInput& input)
+FrameOutcome OnlineDetector::process(const FrameInput& original)
 {
+  // The input contract (input_contract.h): bad stamps and poses are refused before anything changes.
+  const InputProblem stamp = checkStamp(original.stamp, last_stamp_, last_stamp_ > 0.0, options_.require_stamps);
+  if (stamp.reason == "stamp went backwards")
+  {
+    FrameOutcome jumped;
+    jumped.query.stamp = original.stamp;
+    jumped.query.session = original.session;
+    jumped.query.source = original.source;
+    jumped.status = FrameStatus::TimeJump;
+    return jumped;
+  }
+  if (!stamp.ok())
+    throw FrameRefused(stamp.reason, stamp.what);
+  FrameInput input_copy;
+  const FrameInput* checked = &original;
+  if (original.has_pose)
+  {
+    Pose pose = original.pose;
+    const InputProblem problem = checkPose(pose);
+    if (!problem.ok())
+      throw FrameRefused(problem.reason, problem.what);
+    if (pose != original.pose)
+    {
+      input_copy = original;  // cv::Mat copies share their pixels
+      input_copy.pose = pose;
+      checked = &input_copy;
+    }
+  }
+  const FrameInput& input = *checked;
   FrameOutcome outcome;
   outcome.query.stamp = input.stamp;
   outcome.query.session = input.session;
   outcome.query.source = input.source;
   outcome.query.has_pose = input.has_pose;
   outcome.query.pose = input.pose;
-  if (input.stamp > 0.0 && last_stamp_ > 0.0 && input.stamp < last_stamp_)
-  {
-    outcome.status = FrameStatus::TimeJump;
-    return outcome;
-  }
   if (!isKeyframe(input))
   {
     outcome.status = FrameStatus::NotKeyframe;
@@ -181,7 +216,7 @@ FrameOutcome OnlineDetector::process(const FrameInput& input)
   }
   // Bad input throws here, before anything is stored.
   auto start = std::chrono::steady_clock::now();
-  const std::vector<Patch> cells = patches(input);
+  const std::vector<Patch> cells = placePatches(input);
   outcome.times.preprocess_ms = millisecondsSince(start);
   start = std::chrono::steady_clock::now();
   const FrameDescriptor descriptor = describer_.describe(cells);

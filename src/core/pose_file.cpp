@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "openable/error.h"
+#include "openable/input_contract.h"
 
 namespace openable
 {
@@ -81,8 +82,13 @@ PoseFile readTum(const std::string& path)
     if (!out.stamps.empty() && v[0] < out.stamps.back())
       throw Error(at(path, number) + "stamp " + std::to_string(v[0]) + " goes backwards (previous " +
                   std::to_string(out.stamps.back()) + "); expected the poses in frame order");
+    // The input contract: a near-unit quaternion is normalised, a clearly non-unit one refused.
+    Pose pose{{v[1], v[2], v[3], v[4], v[5], v[6], v[7]}};
+    const InputProblem problem = checkPose(pose);
+    if (!problem.ok())
+      throw Error(at(path, number) + problem.what);
     out.stamps.push_back(v[0]);
-    out.poses.push_back({v[1], v[2], v[3], v[4] / norm, v[5] / norm, v[6] / norm, v[7] / norm});
+    out.poses.push_back(pose);
   }
   return out;
 }

@@ -45,6 +45,15 @@ int positiveFrames(const DecisionTable& table, const GroundTruth& truth, int num
       throw Error("published scoring: '" + table.path + "' line " + std::to_string(d.line) + ": query " +
                   std::to_string(d.query) + " is not a frame of the " + std::to_string(num_frames) + "-frame stream");
     }
+    // A match outside the stream cannot be judged: refused rather than silently counted as wrong (-1 is a
+    // frame without a candidate, which a published row cannot be).
+    const int references = std::max(num_frames, truth.numReferences());
+    if (d.match >= references || d.match < -1 || (d.published() && d.match < 0))
+    {
+      throw Error("published scoring: '" + table.path + "' line " + std::to_string(d.line) + ": match " +
+                  std::to_string(d.match) + " of query " + std::to_string(d.query) + " is not a frame of the " +
+                  std::to_string(references) + "-frame stream");
+    }
   }
   int positives = 0;
   for (int q = 0; q < num_frames; ++q)

@@ -6,6 +6,7 @@
 
 #include "openable/error.h"
 #include "openable/frame_describer.h"
+#include "openable/input_contract.h"
 #include "openable/reference_map.h"
 #include "openable/trajectory_export.h"
 #include "openable_ros/conversions.h"
@@ -28,6 +29,7 @@ openable::OnlineOptions onlineOptions(const RosParameters& p)
   options.verify = p.verify;
   options.verify_required = p.verify_required;
   options.feature_bytes = size_t(p.verify_memory * 1024.0 * 1024.0);
+  options.require_stamps = true;  // a header stamp of 0 is unset: a backend cannot place such a loop closure
   return options;
 }
 
@@ -169,6 +171,14 @@ void Detector::process(const std_msgs::Header& header, const std::string& topic,
     outcome = detector_->process(input);
     if (!acceptStamp(header, topic, outcome, input))
       return;
+  }
+  catch (const openable::FrameRefused& e)
+  {
+    // The input contract (openable/input_contract.h): each reason counted and throttled on its own.
+    ++counters_.rejected[e.reason()];
+    warnThrottled("refused " + e.reason(), kWarnPeriod,
+                  "'" + topic + "': " + e.what() + " (frame refused: " + e.reason() + ")");
+    return;
   }
   catch (const openable::Error& e)
   {

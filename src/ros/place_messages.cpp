@@ -2,6 +2,7 @@
 
 #include <boost/make_shared.hpp>
 
+#include "openable/input_contract.h"
 #include "openable_ros/conversions.h"
 
 namespace openable_ros
@@ -125,11 +126,14 @@ LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::M
   msg->sequence_length = best.sequence_length;
   msg->direction = best.direction;
   msg->shift = best.shift;
-  msg->has_poses = o.has_query_pose && best.has_pose;
+  // The last gate before a backend: poses from another server's candidates pass the input contract too.
+  openable::Pose query_pose = o.query_pose, match_pose = best.pose;
+  msg->has_poses = o.has_query_pose && best.has_pose && openable::checkPose(query_pose).ok() &&
+                   openable::checkPose(match_pose).ok();
   if (msg->has_poses)
   {
-    msg->query_pose = toPoseMsg(o.query_pose);
-    msg->match_pose = toPoseMsg(best.pose);
+    msg->query_pose = toPoseMsg(query_pose);
+    msg->match_pose = toPoseMsg(match_pose);
   }
   return msg;
 }

@@ -108,9 +108,12 @@ std::unique_ptr<PlaceServerHost> PlaceServerHost::create(ros::NodeHandle nh, ros
   for (const std::string& entry : robots.empty() ? std::vector<std::string>{""} : robots)
   {
     const std::string topic = entry.empty() ? "place_descriptors" : descriptorTopic(entry);
+    // One topic per robot: its messages must name that robot (the detector's default name, from its
+    // namespace). The single topic without ~robots carries every robot: not checked.
+    const std::string robot = entry.empty() ? "" : openable::robotOfTopic(nh.resolveName(topic));
     h->subscribers_.push_back(nh.subscribe<PlaceDescriptor>(
         topic, uint32_t(queue),
-        [self, topic](const PlaceDescriptorConstPtr& msg) { self->descriptorCallback(msg, topic); }));
+        [self, topic, robot](const PlaceDescriptorConstPtr& msg) { self->descriptorCallback(msg, topic, robot); }));
   }
   h->save_srv_ = pnh.advertiseService("save_map", &PlaceServerHost::save, self);
   h->load_srv_ = pnh.advertiseService("load_map", &PlaceServerHost::load, self);
@@ -132,14 +135,17 @@ std::unique_ptr<PlaceServerHost> PlaceServerHost::create(ros::NodeHandle nh, ros
   return h;
 }
 
-void PlaceServerHost::descriptorCallback(const PlaceDescriptorConstPtr& msg, const std::string& topic)
+void PlaceServerHost::descriptorCallback(const PlaceDescriptorConstPtr& msg, const std::string& topic,
+                                         const std::string& robot)
 {
   std::lock_guard<std::mutex> lock(mutex_);
   ++received_;
   openable::ServerCandidates answer;
   try
   {
-    answer = server_->process(toInput(*msg));
+    openable::PlaceDescriptorInput input = toInput(*msg);
+    input.topic_robot = robot;
+    answer = server_->process(input);
   }
   catch (const openable::DescriptorRefused& e)
   {

@@ -64,6 +64,8 @@ public:
     input = openable::FrameInput();
     if (!source_.next(input.image, input.source))
       return false;
+    if (!source_.problem().empty())  // the frame is then skipped as empty: say why first
+      std::cerr << "warning: " << source_.problem() << "\n";
     std::string right_name;
     if (right_ && !right_->next(input.right, right_name))
       throw Error("the right images end before the left ones at '" + input.source + "'");

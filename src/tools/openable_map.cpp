@@ -23,7 +23,8 @@ const char kUsage[] = R"(openable_map: what a saved map holds, maps merged, a ma
 Usage:
   openable_map info MAP                 sessions (name, robot, frames, ids, start stamp), configuration, bytes
   openable_map merge A B -o C           C holds A's sessions, then B's (their ids renumbered after A's); both
-                                        must be described with the same configuration and share no session name
+                                        must be described with the same configuration, share no session name
+                                        and hold frames (an empty map is refused, as --map-in refuses it)
   openable_map export MAP --csv DIR     DIR/frames.csv: session,session_name,id,stamp,source,has_pose,x,y,z,qx,qy,qz,qw
                                         DIR/loop_closures.csv: query_session,query,match_session,match,distance,score
                                         (the loops a run continuing the sessions one after another publishes,
@@ -81,10 +82,19 @@ int info(const std::string& path)
   return 0;
 }
 
+/// A map with at least one frame: what --map-in and the detectors accept (an empty one they refuse).
+openable::SessionMap loadWithFrames(const std::string& path)
+{
+  openable::SessionMap map = openable::SessionMap::load(path);
+  if (map.frameCount() == 0)
+    throw Error("map '" + path + "' holds no frame (" + std::to_string(map.sessionCount()) +
+                " sessions); --map-in and the detectors refuse such a map: expected a map with at least one place");
+  return map;
+}
+
 int merge(const std::string& a, const std::string& b, const std::string& out)
 {
-  const openable::SessionMap merged = openable::SessionMap::merge(openable::SessionMap::load(a),
-                                                                  openable::SessionMap::load(b));
+  const openable::SessionMap merged = openable::SessionMap::merge(loadWithFrames(a), loadWithFrames(b));
   merged.save(out);
   std::cout << "merged " << a << " and " << b << " into " << out << ": " << merged.sessionCount() << " sessions, "
             << merged.frameCount() << " frames\n";

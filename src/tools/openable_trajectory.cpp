@@ -205,6 +205,19 @@ int run(const Options& o)
   const openable::GroundTruth truth = o.pairs.empty() ? openable::posesGroundTruth(positions, o.distance, o.exclusion)
                                                       : openable::loadPairsGroundTruth(o.pairs, o.pair_tolerance);
   openable::judgeLoops(loops, truth);
+  // Every input is read before anything is printed or written: a bad one leaves no half-done output.
+  std::vector<double> stamps;
+  if (!o.times.empty())
+  {
+    stamps = loadTimes(o.times);
+    // times.txt of a whole sequence may list more frames than the poses cover: keep the first ones.
+    if (stamps.size() < positions.size())
+      throw openable::Error("times: '" + o.times + "' has " + std::to_string(stamps.size()) + " stamps for " +
+                            std::to_string(positions.size()) + " poses");
+    stamps.resize(positions.size());
+  }
+  const std::map<int, openable::GeoPosition> geo =
+      o.geo.empty() ? std::map<int, openable::GeoPosition>() : openable::loadGeoPositions(o.geo);
   size_t agreeing = 0;
   for (const auto& loop : loops)
     agreeing += loop.agrees ? 1 : 0;
@@ -215,16 +228,6 @@ int run(const Options& o)
 
   if (!positions.empty())
   {
-    std::vector<double> stamps;
-    if (!o.times.empty())
-    {
-      stamps = loadTimes(o.times);
-      // times.txt of a whole sequence may list more frames than the poses cover: keep the first ones.
-      if (stamps.size() < positions.size())
-        throw openable::Error("times: '" + o.times + "' has " + std::to_string(stamps.size()) + " stamps for " +
-                              std::to_string(positions.size()) + " poses");
-      stamps.resize(positions.size());
-    }
     const openable::TrajectoryPlot plot(positions, o.size);
     std::vector<unsigned char> png;
     cv::imencode(".png", plot.draw(loops, title), png);
@@ -234,7 +237,7 @@ int run(const Options& o)
   if (!o.geo.empty())
   {
     size_t skipped = 0;
-    const std::string kml = openable::trajectoryKml(openable::loadGeoPositions(o.geo), loops, title, &skipped);
+    const std::string kml = openable::trajectoryKml(geo, loops, title, &skipped);
     if (skipped > 0)
       std::cerr << "openable_trajectory: " << skipped << " loops name a frame without geographic position in '" << o.geo
                 << "'; left out of the KML\n";

@@ -340,8 +340,8 @@ std::string versionOneMap(uint64_t first_id, const std::vector<uint64_t>& ids)
     put<double>(bytes, 10.0 + double(id));  // stamp
     put<uint32_t>(bytes, 4);                // session
     put<uint8_t>(bytes, id % 2);            // pose flag
-    for (int k = 0; k < 7; ++k)
-      put<double>(bytes, double(id + k));
+    for (int k = 0; k < 7; ++k)  // a position and the identity rotation (the input contract: unit quaternions)
+      put<double>(bytes, k < 3 ? double(id + k) : k == 6 ? 1.0 : 0.0);
     const std::string source = "frame" + std::to_string(id);
     put<uint64_t>(bytes, source.size());
     bytes += source;
@@ -376,7 +376,8 @@ TEST(PlaceDatabase, VersionOneMapsLoadAndNonConsecutiveIdsAreRefused)
     EXPECT_EQ(info.has_pose, (7 + i) % 2 == 1);
     if (info.has_pose)
     {
-      EXPECT_EQ(info.pose[6], double(7 + i + 6));
+      EXPECT_EQ(info.pose[2], double(7 + i + 2));
+      EXPECT_EQ(info.pose[6], 1.0);
     }
     EXPECT_EQ(db.descriptor(i)[0], (7 + i) * 3);
   }

@@ -112,7 +112,7 @@ TEST(PoseFile, TumWithCommentsStampsAndUnnormalisedQuaternions)
                                      "1305031102.175304 1.3405 0.6266 1.6575 0.6574 0.6126 -0.2949 -0.3248\n"
                                      "\n"
                                      "  # a comment after a blank line\n"
-                                     "1305031102.211214 1.3303 0.6256 1.6464 0 0 0 2\n"
+                                     "1305031102.211214 1.3303 0.6256 1.6464 0 0 0 1.004\n"
                                      "1305031102.211214 -1 -2 -3 0 0 -1 0\n");
   const PoseFile file = openable::readPoseFile(path);
   EXPECT_EQ(file.format, PoseFile::Format::Tum);

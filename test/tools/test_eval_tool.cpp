@@ -277,6 +277,16 @@ TEST_F(EvalToolTest, BadPublishedInputGivesANonZeroExitAndOneLineReason)
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("must start at a frame in [1, 7]"), std::string::npos) << r.err;
 
+  // Issue 22: a published match outside the stream was silently counted as wrong.
+  std::ofstream(path("far.csv")) << "query,match,distance,score,status\n"
+                                    "4,0,0.1,0.9,published\n5,40,0.1,0.9,published\n";
+  r = run("--published '" + path("far.csv") + "' --joined 4 --frames 8 --output '" + path("far") + "'");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("line 3: match 40 of query 5 is not a frame of the 8-frame stream"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("far/metrics.json")));
+
   r = run("--matrix '" + path("m.npy") + "' --joined 0 --output '" + path("out") + "'");
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(lines(r.err).size(), 1u) << r.err;

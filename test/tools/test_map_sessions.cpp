@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "../core/test_util.h"
+#include "openable/frame_describer.h"
+#include "openable/session_map.h"
 #include "run_tool.h"
 
 namespace fs = std::filesystem;
@@ -239,4 +241,18 @@ TEST_F(MapSessions, MapsOfAnotherConfigurationAndRepeatedNamesAreRefusedAndNothi
   EXPECT_FALSE(fs::exists(dir_ + "/mixed.map"));
   EXPECT_EQ(mapTool("info " + dir_ + "/missing.map").exit_code, 1);
   EXPECT_EQ(mapTool("frobnicate").exit_code, 2);
+}
+
+TEST_F(MapSessions, AMapWithoutFramesIsNotMerged)
+{
+  // Issue 22: merge accepted a 0-frame map that --map-in and the detectors refuse.
+  const openable::Config config =
+      openable::Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml");
+  openable::SessionMap empty(openable::FrameDescriber(config).layout(), config.toYaml());
+  empty.addSession(openable::SessionInfo{"nobody", "", 0.0}, 0);
+  empty.save(dir_ + "/empty.map");
+  const Result r = mapTool("merge " + dir_ + "/day.map " + dir_ + "/empty.map -o " + dir_ + "/with_empty.map");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("empty.map' holds no frame (1 sessions)"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ + "/with_empty.map"));
 }

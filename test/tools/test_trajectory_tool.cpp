@@ -167,3 +167,20 @@ TEST_F(TrajectoryToolTest, BadInputGivesOneLineReason)
     }
   }
 }
+
+TEST_F(TrajectoryToolTest, AFolderAsLoopsOrBadTimesLeaveNoSummaryAndNoOutput)
+{
+  // Issue 22: an (empty) output folder given as --loops was read as 0 loops; a bad --times failed after the
+  // summary was printed. Every input is now read first.
+  fs::create_directories(path("empty_run"));
+  ToolRun r = run("--poses " + kPoses + " --loops " + path("empty_run") + " --output " + path("o"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("is a folder; expected a file (loop_closures.csv"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+  std::ofstream(path("times.txt")) << "0.0\nnot a time\n";
+  r = run("--poses " + kPoses + " --loops " + kTruth + " --times " + path("times.txt") + " --output " + path("o"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("is not one time in seconds"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(fs::exists(path("o/trajectory.png")));
+}

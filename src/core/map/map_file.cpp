@@ -1,13 +1,16 @@
 #include "map_file.h"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 
 #include "openable/atomic_file.h"
 #include "openable/config.h"
 #include "openable/error.h"
+#include "openable/input_contract.h"
 
 namespace fs = std::filesystem;
 
@@ -31,6 +34,9 @@ constexpr size_t kSessionBytes = 6 * 8;
 /// A stored configuration is a few hundred bytes of YAML; names are short.
 constexpr size_t kMaxConfigBytes = 1 << 20;
 constexpr size_t kMaxNameBytes = 1 << 16;
+/// Sessions a map may hold: one per robot run, years of a fleet's runs. Names are compared with every
+/// earlier one on load, so the cap also bounds that cost.
+constexpr uint32_t kMaxSessions = 1 << 14;
 
 uint64_t fnv1a(const char* data, size_t size)
 {
@@ -226,9 +232,18 @@ PlaceDatabase getFrames(Reader& r, uint32_t version, const DescriptorLayout& lay
       for (double& v : info.pose)
         v = r.get<double>("pose");
     info.source = r.getString("source name", kMaxNameBytes);
+    // The input contract holds for what a file brings too (poses a backend would receive, stamps).
+    const InputProblem pose = info.has_pose ? checkPose(info.pose) : InputProblem();
+    if (!pose.ok())
+      throw Error("map file '" + path + "' is corrupt (frame " + std::to_string(first_id + i) + ": " + pose.what + ")");
+    if (!std::isfinite(info.stamp) || info.stamp < 0.0)
+      throw Error("map file '" + path + "' is corrupt (frame " + std::to_string(first_id + i) + ": stamp " +
+                  std::to_string(info.stamp) + "; expected finite seconds >= 0)");
   }
   PlaceDatabase db(layout, capacity, config_yaml);
   db.renumber(first_id);
+  if (frames == 0)
+    return db;  // nothing allocated: an empty session costs its table entry, whatever the layout declares
   db.reserve(frames);
   std::vector<uint64_t> descriptor(words);
   for (uint64_t i = 0; i < frames; ++i)
@@ -260,9 +275,15 @@ void readSessions(Reader& r, Contents& contents)
   contents.config_yaml = r.getString("configuration", kMaxConfigBytes);
   checkStoredConfiguration(contents.config_yaml, r.path());
   const auto count = r.get<uint32_t>("session count");
+  if (count > kMaxSessions)
+    throw Error("map file '" + r.path() + "' declares " + std::to_string(count) + " sessions; at most " +
+                std::to_string(kMaxSessions) + " are supported (one a robot run)");
   if (count > r.remaining() / kSessionBytes)
     throw Error("map file '" + r.path() + "' is corrupt (session count " + std::to_string(count) +
                 " does not fit the file)");
+  contents.sessions.reserve(count);
+  contents.frames.reserve(count);
+  std::set<std::string> names;
   for (uint32_t s = 0; s < count; ++s)
   {
     SessionInfo info;
@@ -272,9 +293,8 @@ void readSessions(Reader& r, Contents& contents)
     const auto capacity = r.get<uint64_t>("capacity");
     const auto first_id = r.get<uint64_t>("first id");
     const auto frames = r.get<uint64_t>("frame count");
-    for (const SessionInfo& earlier : contents.sessions)
-      if (earlier.name == info.name)
-        throw Error("map file '" + r.path() + "' is corrupt (session name '" + info.name + "' twice)");
+    if (!names.insert(info.name).second)
+      throw Error("map file '" + r.path() + "' is corrupt (session name '" + info.name + "' twice)");
     contents.sessions.push_back(std::move(info));
     contents.frames.push_back(getFrames(r, kVersion, contents.layout, contents.config_yaml, capacity, first_id, frames));
   }

@@ -42,11 +42,31 @@ bool PlaceServer::owns(const std::string& session) const
   return owned_.empty() || std::find(owned_.begin(), owned_.end(), session) != owned_.end();
 }
 
-void PlaceServer::check(const PlaceDescriptorInput& input) const
+std::string robotOfTopic(const std::string& topic)
+{
+  std::string robot = topic;
+  const std::string suffix = "place_descriptors";
+  if (robot.size() >= suffix.size() && robot.compare(robot.size() - suffix.size(), suffix.size(), suffix) == 0)
+    robot.erase(robot.size() - suffix.size());
+  while (!robot.empty() && robot.front() == '/')
+    robot.erase(0, 1);
+  while (!robot.empty() && robot.back() == '/')
+    robot.pop_back();
+  for (char& c : robot)
+    if (c == '/')
+      c = '_';
+  return robot;
+}
+
+std::array<double, 7> PlaceServer::check(const PlaceDescriptorInput& input) const
 {
   const std::string who = "robot '" + input.robot + "' session '" + input.session + "'";
   if (input.session.empty())
     throw DescriptorRefused("no session name", "robot '" + input.robot + "': a descriptor without a session name");
+  if (!input.topic_robot.empty() && input.robot != input.topic_robot)
+    throw DescriptorRefused("robot name", who + ": robot name '" + input.robot + "' on the topic of robot '" +
+                                              input.topic_robot + "'; expected '" + input.topic_robot +
+                                              "' (a detector names itself after its namespace)");
   if (input.config_hash != hash_)
     throw DescriptorRefused("configuration hash",
                             who + ": configuration hash " + hex(input.config_hash) + " differs from this server's " +
@@ -58,14 +78,36 @@ void PlaceServer::check(const PlaceDescriptorInput& input) const
     throw DescriptorRefused("length", who + ": descriptor of " + std::to_string(input.descriptor.size() * 8) +
                                           " bytes; this server's configuration makes " + std::to_string(words * 8));
   const auto s = streams_.find(input.session);
-  if (s != streams_.end() && s->second.started && input.stamp < s->second.last_stamp)
+  const bool started = s != streams_.end() && s->second.started;
+  const double previous = started ? s->second.last_stamp : 0.0;
+  if (started && s->second.has_frame_id && input.frame_id == s->second.last_frame_id && input.stamp == previous)
+    throw DescriptorRefused("repeated message", who + ": frame " + std::to_string(input.frame_id) +
+                                                    " again (the same message twice); expected each frame once");
+  const InputProblem stamp = checkStamp(input.stamp, previous, started, true);
+  if (!stamp.ok())
+    throw DescriptorRefused(stamp.reason, who + ": " + stamp.what +
+                                              (stamp.reason == "stamp went backwards"
+                                                   ? " (a restarted robot must send a new session name)"
+                                                   : ""));
+  if (started && input.stamp == previous)
   {
     std::ostringstream what;
     what.precision(17);
-    what << who << ": stamp " << input.stamp << " is before the previous frame's " << s->second.last_stamp
-         << " (a restarted robot must send a new session name)";
-    throw DescriptorRefused("stamp went backwards", what.str());
+    what << who << ": stamp " << input.stamp << " again (frame " << input.frame_id
+         << "); expected stamps strictly increasing within a session";
+    throw DescriptorRefused("stamp repeated", what.str());
   }
+  if (started && s->second.has_frame_id && input.frame_id <= s->second.last_frame_id)
+    throw DescriptorRefused("frame id went backwards",
+                            who + ": frame id " + std::to_string(input.frame_id) + " is not after the previous " +
+                                std::to_string(s->second.last_frame_id) + "; expected increasing frame ids");
+  if (!input.has_pose)
+    return input.pose;
+  Pose pose = input.pose;
+  const InputProblem problem = checkPose(pose);
+  if (!problem.ok())
+    throw DescriptorRefused(problem.reason, who + ": " + problem.what);
+  return pose;
 }
 
 PlaceServer::Stream& PlaceServer::stream(const std::string& session)
@@ -75,7 +117,7 @@ PlaceServer::Stream& PlaceServer::stream(const std::string& session)
   {
     // Full sequences only (loop-closure use): the partial chains at a stream's start were the main source
     // of false loops (MapMatcher).
-    s = streams_.emplace(session, Stream{MapMatcher(matching_, map_.layout(), false), 0.0, false}).first;
+    s = streams_.emplace(session, Stream{MapMatcher(matching_, map_.layout(), false), 0.0, false, false, 0}).first;
     // A session continued from a loaded map keeps its stamps in order too.
     const int index = map_.findSession(session);
     if (index >= 0 && !map_.frames(uint32_t(index)).empty())
@@ -125,9 +167,10 @@ ServerCandidate PlaceServer::named(const Candidate& c) const
 
 ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
 {
+  std::array<double, 7> pose;
   try
   {
-    check(input);
+    pose = check(input);
   }
   catch (const DescriptorRefused& e)
   {
@@ -150,7 +193,7 @@ ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
   out.query_frame = input.frame_id;
   out.query_stamp = input.stamp;
   out.has_query_pose = input.has_pose;
-  out.query_pose = input.pose;
+  out.query_pose = pose;
   const Detection detection = s.matcher.match(input.descriptor, map_, own, input.stamp);
   out.candidates = detection.candidates;
   for (const Candidate& c : detection.top)
@@ -168,17 +211,22 @@ ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
     info.stamp = input.stamp;
     info.source = input.robot;
     info.has_pose = input.has_pose;
-    info.pose = input.pose;
+    info.pose = pose;
     out.query_id = map_.add(uint32_t(own), input.descriptor, info);
     out.stored = true;
   }
   s.last_stamp = input.stamp;
   s.started = true;
+  s.has_frame_id = true;
+  s.last_frame_id = input.frame_id;
   return out;
 }
 
 void PlaceServer::save(const std::string& path) const
 {
+  if (map_.frameCount() == 0)
+    throw Error("the map holds no frame (" + std::to_string(map_.sessionCount()) + " sessions): nothing saved to '" +
+                path + "' (the detectors refuse an empty map)");
   map_.save(path);
 }
 
