@@ -55,8 +55,9 @@ public:
   void setCamera(const openable::PinholeCamera& camera);
   /// Warns while synchronised inputs arrive without pairing up (or nothing ever arrives).
   void watchSync(const std::vector<std::string>& topics, const std::string& advice);
-  /// A message reached input `index` (its header.seq, for the frames lost in queues: SequenceGaps).
-  void noteInput(size_t index, uint32_t seq);
+  /// A message reached input `index` (its header's seq and stamp, for the frames lost in queues:
+  /// SequenceGaps).
+  void noteInput(size_t index, const std_msgs::Header& header);
   void noteSet();
   void noteDropped(size_t dropped);
 

@@ -41,7 +41,7 @@ private:
 
   void imageCallback(const sensor_msgs::ImageConstPtr& msg)
   {
-    detector_->noteInput(0, msg->header.seq);
+    detector_->noteInput(0, msg->header);
     openable::FrameInput input;
     std::string error;
     if (!toCoreImage(msg, input.image, error))

@@ -66,7 +66,7 @@ private:
 
   void panoramaCallback(const sensor_msgs::ImageConstPtr& msg)
   {
-    detector_->noteInput(0, msg->header.seq);
+    detector_->noteInput(0, msg->header);
     openable::FrameInput input;
     std::string error;
     if (!toCoreImage(msg, input.image, error))
@@ -79,7 +79,7 @@ private:
 
   void cameraCallback(size_t index, const sensor_msgs::ImageConstPtr& msg)
   {
-    detector_->noteInput(index, msg->header.seq);
+    detector_->noteInput(index, msg->header);
     Ring::Set set;
     const bool complete = ring_->add(index, msg, set);
     detector_->noteDropped(ring_->dropped());

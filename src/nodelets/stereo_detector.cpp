@@ -54,7 +54,7 @@ private:
     const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
     left_sub_.subscribe(*input_transport_, "left/image_rect", queue, hints);
     left_sub_.registerCallback(boost::function<void(const sensor_msgs::ImageConstPtr&)>(
-        [this](const sensor_msgs::ImageConstPtr& msg) { detector_->noteInput(0, msg->header.seq); }));
+        [this](const sensor_msgs::ImageConstPtr& msg) { detector_->noteInput(0, msg->header); }));
     // camera_info is optional: when it comes, it is checked against the images (calibrated, same size).
     left_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>("left/camera_info", 1,
                                                            [this](const sensor_msgs::CameraInfoConstPtr& msg)
@@ -69,7 +69,7 @@ private:
     {
       disparity_sub_.subscribe(nh, "disparity", queue);
       disparity_sub_.registerCallback(boost::function<void(const stereo_msgs::DisparityImageConstPtr&)>(
-          [this](const stereo_msgs::DisparityImageConstPtr& msg) { detector_->noteInput(1, msg->header.seq); }));
+          [this](const stereo_msgs::DisparityImageConstPtr& msg) { detector_->noteInput(1, msg->header); }));
       if (approximate)
       {
         approximate_disparity_ = std::make_unique<message_filters::Synchronizer<ApproximateDisparity>>(
@@ -87,7 +87,7 @@ private:
     }
     right_sub_.subscribe(*input_transport_, "right/image_rect", queue, hints);
     right_sub_.registerCallback(boost::function<void(const sensor_msgs::ImageConstPtr&)>(
-        [this](const sensor_msgs::ImageConstPtr& msg) { detector_->noteInput(1, msg->header.seq); }));
+        [this](const sensor_msgs::ImageConstPtr& msg) { detector_->noteInput(1, msg->header); }));
     right_info_sub_ = nh.subscribe<sensor_msgs::CameraInfo>("right/camera_info", 1,
                                                             [this](const sensor_msgs::CameraInfoConstPtr& msg)
                                                             {

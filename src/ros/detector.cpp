@@ -362,10 +362,10 @@ void Detector::watchSync(const std::vector<std::string>& topics, const std::stri
                                     });
 }
 
-void Detector::noteInput(size_t index, uint32_t seq)
+void Detector::noteInput(size_t index, const std_msgs::Header& header)
 {
   std::lock_guard<std::mutex> lock(mutex_);
-  gaps_.note(index, seq);
+  gaps_.note(index, header.seq, header.stamp.toSec());
   counters_.dropped_queue = gaps_.lost();
   if (sync_)
     sync_->noteInput(index);

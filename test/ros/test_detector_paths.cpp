@@ -13,6 +13,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <rosbag/bag.h>
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <sensor_msgs/NavSatFix.h>
@@ -313,6 +314,62 @@ TEST(DetectorPaths, FramesDroppedInTheQueueAreCountedFromSeqGaps)
               diagnostics.number("frames received"), diagnostics.number("frames dropped (queue)"));
   EXPECT_GT(diagnostics.number("frames dropped (queue)"), 0);
   EXPECT_LT(diagnostics.number("frames received"), frames + 1);
+}
+
+TEST(DetectorPaths, FramesDroppedFromASeq0BagAreCountedFromStamps)
+{
+  // Issue 23: a converted bag whose images all have seq 0, played by rosbag faster than the detector
+  // (~queue_size 1) can keep up. seq says nothing, so the drops must come from the stamps (a 10 Hz camera).
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  const std::string dir = pnh.param<std::string>("data_dir", OPENABLE_SOURCE_DIR "/../shared/data/gardens_point");
+  DiagnosticsWatcher diagnostics(nh);
+  const std::string bag_path = testing::TempDir() + "/openable_seq0_" + std::to_string(::getpid()) + ".bag";
+  const int frames = 300;
+  {
+    rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
+    ros::Time record(100.0);
+    for (int i = 0; i < frames; ++i)
+    {
+      cv::Mat small;
+      cv::resize(gardensPoint(dir, i % 100), small, cv::Size(160, 120), 0, 0, cv::INTER_AREA);
+      auto msg = openable_ros_test::toMsg(small, enc::BGR8, ros::Time(900.0 + 0.1 * i), "camera");
+      msg->header.seq = 0;
+      // Recorded one by one for the first 30 frames (played at 100x: 10 ms apart, the detector keeps up),
+      // then in a burst of 0.1 ms spacing (it cannot).
+      record += ros::Duration(i < 30 ? 1.0 : 0.01);
+      bag.write("/image", record, msg);
+    }
+  }
+  const pid_t player = fork();
+  if (player == 0)
+  {
+    execlp("rosbag", "rosbag", "play", "-q", "-r", "100", "--wait-for-subscribers", bag_path.c_str(),
+           static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  ASSERT_GT(player, 0);
+  int status = 0;
+  const bool played = waitFor([&] { return waitpid(player, &status, WNOHANG) == player; }, 90.0);
+  if (!played)
+  {
+    kill(player, SIGKILL);
+    waitpid(player, &status, 0);
+  }
+  std::remove(bag_path.c_str());
+  ASSERT_TRUE(played) << "rosbag play did not finish within 90 s";
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "rosbag play failed";
+  const auto accounted = [&]
+  { return diagnostics.number("frames received") + diagnostics.number("frames dropped (queue)"); };
+  EXPECT_TRUE(waitFor([&] { return accounted() == frames; }, 30.0))
+      << "received " << diagnostics.number("frames received") << " + dropped "
+      << diagnostics.number("frames dropped (queue)") << ", in the bag " << frames;
+  std::printf("seq-0 bag of %d frames at 100x into ~queue_size 1: %ld received, %ld dropped (queue), worst "
+              "diagnostics level %d\n",
+              frames, diagnostics.number("frames received"), diagnostics.number("frames dropped (queue)"),
+              diagnostics.worstLevel());
+  EXPECT_GT(diagnostics.number("frames dropped (queue)"), 0);
+  EXPECT_GE(diagnostics.worstLevel(), int(diagnostic_msgs::DiagnosticStatus::WARN));
 }
 
 TEST(DetectorPaths, EachStoredFrameKeepsTheNearestFixForTheKml)

@@ -7,6 +7,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/image_encodings.h>
 
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -64,6 +65,12 @@ public:
     std::lock_guard<std::mutex> lock(mutex_);
     return reports_;
   }
+  /// The worst level (OK 0, WARN 1, ERROR 2) of any report so far.
+  int worstLevel()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return worst_level_;
+  }
 
 private:
   void callback(const diagnostic_msgs::DiagnosticArrayConstPtr& msg)
@@ -78,6 +85,7 @@ private:
         continue;
       }
       ++reports_;
+      worst_level_ = std::max(worst_level_, int(status.level));
       for (const auto& kv : status.values)
       {
         values_[kv.key] = kv.value;
@@ -89,6 +97,7 @@ private:
   std::mutex mutex_;
   std::map<std::string, std::string> values_;
   int reports_ = 0;
+  int worst_level_ = 0;
 };
 
 }  // namespace openable_ros_test
