@@ -149,28 +149,28 @@ TEST(ReferenceMap, LoadsACompatibleMapAndRefusesOthersNamingWhy)
 
 TEST(SequenceGaps, CountsTheNumbersThatNeverArrivedAndNothingElse)
 {
-  SequenceGaps gaps;
-  gaps.note(0, 10);  // the first message: nothing before it can be seen
+  SequenceGaps gaps;  // unstamped frames (stamp 0): only seq counts
+  gaps.note(0, 10, 0.0);  // the first message: nothing before it can be seen
   EXPECT_EQ(gaps.lost(), 0u);
-  gaps.note(0, 11);
-  gaps.note(0, 14);  // 12 and 13 were sent and dropped
+  gaps.note(0, 11, 0.0);
+  gaps.note(0, 14, 0.0);  // 12 and 13 were sent and dropped
   EXPECT_EQ(gaps.lost(), 2u);
-  gaps.note(0, 3);  // the publisher restarted: counting goes on from 3
-  gaps.note(0, 3);  // a publisher that does not number (seq stays): nothing
-  gaps.note(0, 5);
+  gaps.note(0, 3, 0.0);  // the publisher restarted: counting goes on from 3
+  gaps.note(0, 3, 0.0);  // a publisher that does not number (seq stays): nothing
+  gaps.note(0, 5, 0.0);
   EXPECT_EQ(gaps.lost(), 3u);
   // A stereo pair lost shows in both inputs: the frames lost are the larger count, not the sum.
-  gaps.note(1, 0);
-  gaps.note(1, 3);
+  gaps.note(1, 0, 0.0);
+  gaps.note(1, 3, 0.0);
   EXPECT_EQ(gaps.lost(), 3u);  // input 0: 3, input 1: 2
-  gaps.note(1, 5);
+  gaps.note(1, 5, 0.0);
   EXPECT_EQ(gaps.lost(), 3u);  // both 3
-  gaps.note(1, 7);
+  gaps.note(1, 7, 0.0);
   EXPECT_EQ(gaps.lost(), 4u);
   // Wrap-around of the 32-bit counter is a step back, not four billion lost frames.
-  gaps.note(0, 4294967295u);
+  gaps.note(0, 4294967295u, 0.0);
   const uint64_t before = gaps.lost();
-  gaps.note(0, 0);
+  gaps.note(0, 0, 0.0);
   EXPECT_EQ(gaps.lost(), before);
 }
 
@@ -204,21 +204,6 @@ TEST(FixHistory, NearestFixWithinTheTolerance)
   EXPECT_FALSE(fixes.nearest(100.0, 0.5, found));
 }
 
-
-TEST(SequenceGaps, NumberedFramesCountTheNumbersThatNeverArrived)
-{
-  SequenceGaps g;
-  g.note(0, 10, 100.0);
-  g.note(0, 11, 100.1);
-  g.note(0, 15, 100.5);  // 12, 13, 14 lost
-  EXPECT_EQ(g.lost(), 3u);
-  g.note(0, 3, 100.6);  // a publisher that restarted: no loss, counting goes on from 3
-  g.note(0, 4, 100.7);
-  EXPECT_EQ(g.lost(), 3u);
-  g.note(1, 0, 100.0);  // another input: the frames lost are the largest count
-  g.note(1, 9, 100.9);
-  EXPECT_EQ(g.lost(), 8u);
-}
 
 TEST(SequenceGaps, UnnumberedFramesCountStepsOfSeveralCameraPeriods)
 {
