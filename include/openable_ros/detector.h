@@ -80,6 +80,8 @@ public:
 private:
   Detector(ros::NodeHandle nh, ros::NodeHandle pnh, std::string name, RosParameters parameters);
   void publish(const std_msgs::Header& header, const openable::FrameOutcome& outcome);
+  /// The bookkeeping of a stored frame: counters, descriptors out, markers, the distance matrix's row.
+  void recordStored(const std_msgs::Header& header, const openable::FrameOutcome& outcome);
   bool acceptStamp(const std_msgs::Header& header, const std::string& topic, openable::FrameOutcome& outcome,
                    openable::FrameInput& input);
   void resetLocked();

@@ -7,7 +7,6 @@
 #include "openable/error.h"
 #include "openable/frame_describer.h"
 #include "openable/input_contract.h"
-#include "openable/reference_map.h"
 #include "openable/trajectory_export.h"
 #include "openable_ros/conversions.h"
 #include "openable_ros/descriptor_publisher.h"
@@ -268,21 +267,36 @@ bool Detector::acceptStamp(const std_msgs::Header& header, const std::string& to
 void Detector::publish(const std_msgs::Header& header, const openable::FrameOutcome& outcome)
 {
   ++counters_.statuses[openable::toString(outcome.status)];
-  if (!outcome.stored)
-  {
-    // Not a keyframe, or the camera stands still: nothing is stored, but the frame has its decision (a
-    // standstill repeats the last one, a loop closure included, stamped with this frame), as offline.
+  // Not a keyframe, or the camera stands still: nothing is stored, but the frame has its decision (a
+  // standstill repeats the last one, a loop closure included, stamped with this frame), as offline.
+  if (outcome.stored)
+    recordStored(header, outcome);
+  else
     ++counters_.skipped_keyframe;
-    const LoopClosurePtr msg = makeLoopClosure(header, outcome);
-    if (decisions_pub_.getNumSubscribers() > 0)
-      decisions_pub_.publish(LoopClosureConstPtr(msg));
-    if (outcome.published())
-    {
-      ++counters_.loops;
-      loop_pub_.publish(LoopClosureConstPtr(msg));
-    }
-    return;
+  LoopClosurePtr msg = makeLoopClosure(header, outcome);
+  if (decisions_pub_.getNumSubscribers() > 0)
+    decisions_pub_.publish(LoopClosureConstPtr(msg));
+  if (outcome.published())
+  {
+    ++counters_.loops;
+    loop_pub_.publish(LoopClosureConstPtr(msg));
   }
+  if (!outcome.stored)
+    return;
+  if (outcome.published())
+  {
+    matrix_->addLoop(outcome.detection.best.id);
+    if (msg->has_poses)
+      markers_->addLoop(msg->query_pose.position, msg->match_pose.position);
+  }
+  const std::string error = matrix_->publish(header, detector_->config());
+  if (!error.empty())
+    warnThrottled("render", kWarnPeriod, error);
+  markers_->publish(header.stamp, outcome.published());
+}
+
+void Detector::recordStored(const std_msgs::Header& header, const openable::FrameOutcome& outcome)
+{
   counters_.addTimes(outcome.times);
   if (descriptors_)
     descriptors_->publish(header, outcome, detector_->loopDetector());
@@ -305,22 +319,6 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
     detector_->loopDetector().lastRow(row_);
     matrix_->addRow(detector_->loopDetector().map().frames(0).firstId(), row_);
   }
-
-  LoopClosurePtr msg = makeLoopClosure(header, outcome);
-  if (decisions_pub_.getNumSubscribers() > 0)
-    decisions_pub_.publish(LoopClosureConstPtr(msg));
-  if (outcome.published())
-  {
-    ++counters_.loops;
-    matrix_->addLoop(outcome.detection.best.id);
-    if (msg->has_poses)
-      markers_->addLoop(msg->query_pose.position, msg->match_pose.position);
-    loop_pub_.publish(LoopClosureConstPtr(msg));
-  }
-  const std::string error = matrix_->publish(header, detector_->config());
-  if (!error.empty())
-    warnThrottled("render", kWarnPeriod, error);
-  markers_->publish(header.stamp, outcome.published());
 }
 
 void Detector::setCamera(const openable::PinholeCamera& camera)
@@ -391,80 +389,6 @@ void Detector::resetLocked()
   markers_->clear();
   fixes_.clear();
   restartGeoFile();
-}
-
-bool Detector::saveMap(const std::string& path, std::string& message, uint32_t& frames)
-{
-  std::lock_guard<std::mutex> lock(mutex_);
-  try
-  {
-    const openable::SessionMap& map = detector_->loopDetector().map();
-    map.save(path);
-    frames = uint32_t(map.frameCount());
-    message = "saved " + std::to_string(frames) + " frames to '" + path + "'";
-    return true;
-  }
-  catch (const openable::Error& e)
-  {
-    message = "cannot save the map to '" + path + "': " + e.what();
-    return false;
-  }
-}
-
-bool Detector::loadMap(const std::string& path, std::string& message, uint32_t& frames)
-{
-  std::lock_guard<std::mutex> lock(mutex_);
-  try
-  {
-    auto map = openable::loadReferenceMap(path, detector_->config());
-    frames = uint32_t(map.frameCount());
-    const size_t sessions = map.sessionCount();
-    const bool continuing = parameters_.map_mode == "continue";
-    auto loaded = std::make_unique<openable::OnlineDetector>(
-        detector_->config(), std::move(map), continuing ? openable::MapMode::Continue : openable::MapMode::Localise,
-        openable::SessionInfo{sessionName(), parameters_.robot, 0.0}, options_);
-    keepCamera(*loaded);
-    detector_ = std::move(loaded);
-    message = "map '" + path + "' loaded: " + std::to_string(sessions) + " sessions, " + std::to_string(frames) +
-              " frames; " +
-              (continuing ? "continuing it as session '" + sessionName() + "'" : std::string("localising against it"));
-  }
-  catch (const openable::Error& e)
-  {
-    message = e.what();
-    return false;
-  }
-  resetLocked();
-  return true;
-}
-
-std::string Detector::sessionName() const
-{
-  return parameters_.session_name.empty() ? session_default_ : parameters_.session_name;
-}
-
-void Detector::keepCamera(openable::OnlineDetector& next) const
-{
-  if (detector_ && detector_->verifier())
-    next.setCamera(detector_->verifier()->camera());
-}
-
-std::string Detector::reset()
-{
-  std::lock_guard<std::mutex> lock(mutex_);
-  const bool had_map = detector_->localisationMode() || detector_->loopDetector().map().sessionCount() > 1;
-  if (had_map)
-  {
-    // Back to a fresh map in loop-closure mode: the loaded map is left, the stream starts afresh (as after
-    // a restart), the camera for verification is kept.
-    auto fresh = freshDetector(detector_->config());
-    keepCamera(*fresh);
-    detector_ = std::move(fresh);
-    resetLocked();
-    return "map unloaded; loop-closure mode with a fresh map";
-  }
-  resetLocked();
-  return "history cleared";
 }
 
 void Detector::applyLive(openable::Config& requested, RosParameters& display)
