@@ -219,10 +219,10 @@ void PlaceServer::load(const std::string& path)
 {
   SessionMap loaded = SessionMap::load(path);
   const Config theirs = Config::fromYamlString(loaded.configYaml());
-  const std::string differences = descriptorDifferences(config_, theirs, "the map");
-  if (!differences.empty())
-    throw Error("map '" + path + "' was described with another configuration: " + differences);
-  if (loaded.layout() != map_.layout())
+  const MapMismatch mismatch = mapMismatch(config_, map_.layout(), theirs, loaded.layout(), "the map");
+  if (!mismatch.keys.empty())
+    throw Error("map '" + path + "' was described with another configuration: " + mismatch.keys);
+  if (mismatch.layout)
     throw Error("map '" + path + "': its descriptor layout differs from this configuration's");
   map_ = std::move(loaded);
   streams_.clear();
