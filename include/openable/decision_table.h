@@ -31,19 +31,12 @@ struct DecisionRow
 };
 
 /// The rows of one file, and whether it is a per-frame decisions file (it has an `accepted` column).
+/// Read by loadDecisionTable (loop_csv.h, where both files' format lives).
 struct DecisionTable
 {
   std::string path;
   std::vector<DecisionRow> rows;
   bool per_frame = false;
 };
-
-/// Reads loop_closures.csv (`query,match,distance,score,status`, maybe more columns such as `direction,shift`)
-/// or decisions.csv (the same plus `accepted`). Columns are found by name in the header, so their order and
-/// extra columns do not matter. Throws Error naming the file, and the line where one is at fault: missing
-/// file, a missing column, a row with the wrong number of fields, a bad number, a status that is no
-/// FrameStatus word, accepted not 0/1, a published row without a match, or a loop_closures.csv row
-/// that is not published.
-DecisionTable loadDecisionTable(const std::string& path);
 
 }  // namespace openable

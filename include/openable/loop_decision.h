@@ -2,10 +2,11 @@
 
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <string>
 
 #include "openable/config.h"
-#include "openable/loop_detector.h"
+#include "openable/map_matcher.h"
 
 namespace openable
 {
@@ -29,6 +30,11 @@ enum class FrameStatus
 /// "not_keyframe", "standstill", "time_jump", "too_early", "excluded", "above_threshold", "not_unique", "inconsistent",
 /// "failed_verification", "unverified".
 const char* toString(FrameStatus status);
+
+/// How unique a best match is, higher = surer: 1 - best / second best (0 when the second best is 0), 1
+/// without a rival. The one definition of uniqueness: MapMatcher and CandidateMerger fill
+/// Detection::uniqueness with it, LoopDecision gates and scores on it.
+float matchUniqueness(float best, std::optional<float> second_best);
 
 /// The part of the loop-closure decision that needs no images: the gates and temporal consistency.
 ///

@@ -19,7 +19,7 @@ struct LoopPair
 /// Loop closures from a file, in file order. Two formats, told apart by the first line that is not blank
 /// or a `#` comment:
 /// - a CSV whose header starts with `query,match` (openable_offline's loop_closures.csv: further columns
-///   such as the distance are ignored);
+///   such as the distance are ignored; its rows are read by readLoopCsvPair, loop_csv.h);
 /// - `i j` lines (0-based frames; the published KITTI loop ground truth), `#` comments allowed.
 /// Throws Error for a missing file, a malformed line (with its number) or a negative frame.
 std::vector<LoopPair> loadLoopPairs(const std::string& path);

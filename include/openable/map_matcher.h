@@ -30,13 +30,18 @@ struct Detection
   uint64_t query_id = 0;
   bool has_candidates = false;  ///< false while nothing can be compared yet (start, exclusion window)
   bool excluded = false;        ///< no candidates although frames are stored: all inside the exclusion
+  bool own_excluded = false;    ///< the query's own session holds frames, all of them inside the exclusion
   size_t candidates = 0;        ///< reference frames compared with a sequence long enough to be a candidate
   Candidate best;
   std::vector<Candidate> top;  ///< up to top_k distinct places, best first
-  float uniqueness = 0.0f;     ///< 1 - best / second best (second best outside uniqueness_window); 1 without rival
-  bool accepted = false;       ///< distance <= threshold (if set) and uniqueness >= min_uniqueness (if set);
-                               ///< false when neither gate is set
+  /// matchUniqueness (loop_decision.h) of the best and the second best place (outside uniqueness_window).
+  /// Whether the frame passes the gates is LoopDecision's to say.
+  float uniqueness = 0.0f;
 };
+
+/// Detection::excluded: no candidate, the query's own past is stored but all of it inside the exclusion
+/// (Detection::own_excluded), and no other session holds a frame (`other_frames`).
+bool onlyExcludedPast(const Detection& detection, size_t other_frames);
 
 /// Matches one stream of query frames against every session of a map it does not own: one SequenceMatcher
 /// per session, so a sequence never spans two sessions. The stream's own session (when its frames are
@@ -72,6 +77,8 @@ public:
   }
 
 private:
+  /// The own-session exclusion, here only: the positions [0, result) of `frames` a query stamped `stamp`
+  /// may be compared with (all of them when the session is not the query's own).
   size_t candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const;
   /// The candidate in `column` of `session`'s matcher.
   Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;

@@ -142,7 +142,6 @@ private:
   /// Throws DescriptorRefused; returns the pose to store (normalised).
   std::array<double, 7> check(const PlaceDescriptorInput& input) const;
   Stream& stream(const std::string& session);
-  bool ownExcluded(const PlaceDatabase& frames, double stamp) const;
   ServerCandidate named(const Candidate& c) const;
 
   Config config_;

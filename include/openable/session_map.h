@@ -101,6 +101,22 @@ private:
 /// "key 'a' (<b_name> 'b'), ..."; empty when maps described with them can be compared.
 std::string descriptorDifferences(const Config& a, const Config& b, const std::string& b_name = "other");
 
+/// Why descriptors of one map (or configuration) cannot be compared with another's. The one map compatibility
+/// check, used wherever a map meets another configuration or map: a detector loading a reference map, a
+/// PlaceServer loading a map, two maps merged. Each caller words its refusal.
+struct MapMismatch
+{
+  std::string keys;     ///< descriptorDifferences(a, b, b_name): empty when the descriptor keys agree
+  bool layout = false;  ///< the descriptor layouts differ
+
+  bool any() const
+  {
+    return !keys.empty() || layout;
+  }
+};
+MapMismatch mapMismatch(const Config& a, const DescriptorLayout& a_layout, const Config& b,
+                        const DescriptorLayout& b_layout, const std::string& b_name = "other");
+
 /// A 64-bit fingerprint of the descriptor keys' values (FNV-1a of "key=value\n" in Config::descriptorKeys()
 /// order): equal for configurations whose descriptors can be compared, the same on every machine. Sent
 /// with descriptors over a network, so a receiver can refuse ones described otherwise.

@@ -36,6 +36,13 @@ const char* toString(FrameStatus status)
   return "unknown";
 }
 
+float matchUniqueness(float best, std::optional<float> second_best)
+{
+  if (!second_best)
+    return 1.0f;
+  return *second_best > 0.0f ? 1.0f - best / *second_best : 0.0f;
+}
+
 LoopDecision::LoopDecision(const Config& config) : config_(config) {}
 
 void LoopDecision::setConfig(const Config& config)
@@ -64,7 +71,8 @@ bool LoopDecision::gatesPass(const Detection& detection, FrameStatus& why) const
     why = FrameStatus::AboveThreshold;
     return false;
   }
-  // With neither gate set nothing is a loop: the best match of a frame always exists, a loop does not.
+  // The acceptance gate, here only. With neither gate set nothing is a loop: the best match of a frame always
+  // exists, a loop does not.
   const bool gated = config_.threshold >= 0.0 || config_.min_uniqueness > 0.0;
   if (!gated || detection.uniqueness < config_.min_uniqueness)
   {

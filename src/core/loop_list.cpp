@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "openable/error.h"
+#include "openable/loop_csv.h"
 
 namespace openable
 {
@@ -14,18 +15,6 @@ bool skippable(const std::string& line)
 {
   const size_t first = line.find_first_not_of(" \t\r");
   return first == std::string::npos || line[first] == '#';
-}
-
-/// A non-negative frame index that is all of `text` (spaces around allowed).
-bool parseFrame(const std::string& text, int& frame)
-{
-  std::istringstream in(text);
-  long value = -1;
-  std::string rest;
-  if (!(in >> value) || (in >> rest) || value < 0 || value > 2147483647L)
-    return false;
-  frame = static_cast<int>(value);
-  return true;
 }
 
 std::string lineError(const std::string& path, int number, const std::string& line, const std::string& expected)
@@ -59,7 +48,7 @@ std::vector<LoopPair> loadLoopPairs(const std::string& path)
       continue;
     if (format == Format::kUnknown)
     {
-      const bool header = line.rfind("query,match", 0) == 0;
+      const bool header = isLoopCsvHeader(line);
       format = header ? Format::kCsv : Format::kPairs;
       if (header)
         continue;
@@ -67,11 +56,7 @@ std::vector<LoopPair> loadLoopPairs(const std::string& path)
     LoopPair loop;
     if (format == Format::kCsv)
     {
-      const size_t first = line.find(',');
-      const size_t second = line.find(',', first == std::string::npos ? first : first + 1);
-      if (first == std::string::npos || !parseFrame(line.substr(0, first), loop.query) ||
-          !parseFrame(line.substr(first + 1, second == std::string::npos ? std::string::npos : second - first - 1),
-                      loop.match))
+      if (!readLoopCsvPair(line, loop.query, loop.match))
         throw Error(lineError(path, number, line, "'query,match,...' with two frame indices >= 0"));
     }
     else

@@ -4,10 +4,16 @@
 #include <cmath>
 
 #include "openable/error.h"
+#include "openable/loop_decision.h"
 #include "openable/pace_matcher.h"
 
 namespace openable
 {
+bool onlyExcludedPast(const Detection& detection, size_t other_frames)
+{
+  return detection.top.empty() && detection.own_excluded && other_frames == 0;
+}
+
 MapMatcher::MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences)
   : config_(config), partial_sequences_(partial_sequences), metric_(layout)
 {
@@ -95,13 +101,12 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   const size_t window = static_cast<size_t>(std::max(0, config_.uniqueness_window));
   std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
   picks.clear();
-  bool own_excluded = false;
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
   {
     const bool own = static_cast<int>(s) == own_session;
     const PlaceDatabase& frames = map.frames(s);
     const size_t columns = candidateColumns(frames, own, stamp);
-    own_excluded = own_excluded || (own && columns == 0 && !frames.empty());
+    detection.own_excluded = detection.own_excluded || (own && columns == 0 && !frames.empty());
     RowMatcher& matcher = *matchers_[s];
     matcher.match(query.data(), frames, columns);
     detection.candidates += matcher.smallestDistinct(wanted, window, minTerms(), taken_);
@@ -116,23 +121,16 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     detection.top.push_back(candidateAt(map, picks[i].session, picks[i].column));
 
   // No candidate although the stream's own past exists and nothing else is in the map: the exclusion.
-  detection.excluded = detection.top.empty() && own_excluded &&
-                       map.frameCount() == map.frames(static_cast<uint32_t>(own_session)).size();
+  const size_t other_frames = detection.own_excluded
+                                  ? map.frameCount() - map.frames(static_cast<uint32_t>(own_session)).size()
+                                  : map.frameCount();
+  detection.excluded = onlyExcludedPast(detection, other_frames);
   if (!detection.top.empty())
   {
     detection.has_candidates = true;
     detection.best = detection.top.front();
-    if (picks.size() < 2)
-      detection.uniqueness = 1.0f;
-    else
-    {
-      const float second = picks[1].distance;
-      detection.uniqueness = second > 0.0f ? 1.0f - detection.best.distance / second : 0.0f;
-    }
-    // At least one gate must be on: with neither a threshold nor a uniqueness bound, nothing is accepted.
-    const bool gated = config_.threshold >= 0.0 || config_.min_uniqueness > 0.0;
-    detection.accepted = gated && (config_.threshold < 0.0 || detection.best.distance <= config_.threshold) &&
-                         detection.uniqueness >= config_.min_uniqueness;
+    detection.uniqueness = matchUniqueness(
+        detection.best.distance, picks.size() < 2 ? std::nullopt : std::optional<float>(picks[1].distance));
   }
   return detection;
 }

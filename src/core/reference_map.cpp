@@ -30,10 +30,11 @@ SessionMap loadReferenceMap(const std::string& path, const Config& config)
   {
     throw Error(refused + "its configuration cannot be read (" + e.what() + ")");
   }
-  const std::string differences = descriptorDifferences(map_config, config, "running");
-  if (!differences.empty())
-    throw Error(refused + "it was built with an incompatible configuration: " + differences);
-  if (map.layout() != FrameDescriber(config).layout())
+  const MapMismatch mismatch =
+      mapMismatch(map_config, map.layout(), config, FrameDescriber(config).layout(), "running");
+  if (!mismatch.keys.empty())
+    throw Error(refused + "it was built with an incompatible configuration: " + mismatch.keys);
+  if (mismatch.layout)
     throw Error(refused + "its descriptor layout differs from this detector's");
   if (map.frameCount() == 0)
     throw Error(refused + "it holds no frame; expected a map with at least one place");

@@ -17,6 +17,7 @@
 #include "openable/evaluation.h"
 #include "openable/ground_truth_sources.h"
 #include "openable/image_source.h"
+#include "openable/loop_csv.h"
 #include "openable/npy.h"
 #include "openable/progress.h"
 #include "openable/published_scoring.h"

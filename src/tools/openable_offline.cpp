@@ -27,6 +27,7 @@
 #include "openable/frame_describer.h"
 #include "openable/error.h"
 #include "openable/image_source.h"
+#include "openable/loop_csv.h"
 #include "openable/npy.h"
 #include "openable/online_detector.h"
 #include "openable/pose_file.h"
@@ -269,13 +270,23 @@ std::string jsonStage(const char* name, double total, size_t frames)
 }
 
 
-std::string formatFloat(float v)
+/// What loop_closures.csv and decisions.csv say of one frame (frame numbers as FrameNumbers gives them).
+openable::LoopCsvFrame csvFrame(long query, long match, const openable::FrameOutcome& outcome, uint32_t query_session)
 {
-  if (!std::isfinite(v))
-    return "nan";
-  std::ostringstream out;
-  out << std::setprecision(6) << v;
-  return out.str();
+  const openable::Detection& d = outcome.detection;
+  openable::LoopCsvFrame f;
+  f.query = query;
+  f.match = match;
+  f.has_candidates = d.has_candidates;
+  f.distance = d.best.distance;
+  f.score = outcome.score;
+  f.pace = d.best.pace;
+  f.status = outcome.status;
+  f.direction = d.best.direction;
+  f.shift = d.best.shift;
+  f.query_session = query_session;
+  f.match_session = d.best.session;
+  return f;
 }
 
 int run(const Options& options)
@@ -379,10 +390,7 @@ int run(const Options& options)
                               options.quiet);
   std::vector<std::vector<float>> rows;  // per stream file: distances by frame number (empty = not described)
   const bool panoramic = config.camera_type == "panoramic";
-  std::ostringstream loops, decisions;
-  loops << "query,match,distance,score,status" << (panoramic ? ",direction,shift" : "")
-        << ",query_session,match_session\n";
-  decisions << "query,match,distance,score,status,accepted,pace\n";
+  openable::LoopCsvWriter csv(panoramic);
   std::map<std::string, size_t> status_counts;
   size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;
   std::vector<float> row;
@@ -419,9 +427,7 @@ int run(const Options& options)
     ++status_counts[openable::toString(outcome.status)];
     const openable::Detection& d = outcome.detection;
     const long match = d.has_candidates ? numbers->stored(map, d.best.session, d.best.position, own) : -1;
-    decisions << query << "," << match << "," << formatFloat(d.has_candidates ? d.best.distance : NAN) << ","
-              << formatFloat(d.has_candidates ? outcome.score : NAN) << "," << openable::toString(outcome.status) << ","
-              << (outcome.published() ? 1 : 0) << "," << formatFloat(d.has_candidates ? d.best.pace : NAN) << "\n";
+    csv.add(csvFrame(query, match, outcome, localisation ? static_cast<uint32_t>(map.sessionCount()) : own));
     if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;
@@ -431,11 +437,6 @@ int run(const Options& options)
       continue;
     ++published;
     published_correct += std::labs(match - query) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
-    loops << query << "," << match << "," << formatFloat(d.best.distance) << "," << formatFloat(outcome.score)
-          << ",published";
-    if (panoramic)
-      loops << "," << int(d.best.direction) << "," << d.best.shift;
-    loops << "," << (localisation ? map.sessionCount() : own) << "," << d.best.session << "\n";
   }
   progress.finish();
   if (timings.frames == 0)
@@ -454,8 +455,8 @@ int run(const Options& options)
                               config.color_map));
   if (config.threshold >= 0)
     writePng(output.path("distance_matrix_thresholded.png"), openable::thresholdView(matrix, config.threshold));
-  openable::writeFileAtomically(output.path("loop_closures.csv"), loops.str());
-  openable::writeFileAtomically(output.path("decisions.csv"), decisions.str());
+  openable::writeFileAtomically(output.path("loop_closures.csv"), csv.loopClosures());
+  openable::writeFileAtomically(output.path("decisions.csv"), csv.decisions());
 
   std::ostringstream json;
   json << "{\n"

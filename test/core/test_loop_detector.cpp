@@ -4,6 +4,7 @@
 
 #include "openable/error.h"
 #include "openable/loop_detector.h"
+#include "acceptance_gate.h"
 #include "test_util.h"
 
 using namespace openable;
@@ -42,12 +43,13 @@ TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
   for (int i = 0; i < 90; ++i)
   {
     const Detection d = detector.process(frames[i]);
+    const bool passes = openable_test::passesAcceptanceGate(c, d);
     EXPECT_EQ(d.query_id, uint64_t(i));
     // Loop-closure mode compares full sequences only: the first is complete L - 1 frames after the window.
     EXPECT_EQ(d.has_candidates, i > c.exclusion_window + c.sequence_length - 1);
     if (i >= 64 && i < 80)  // full sequences inside the revisit
     {
-      EXPECT_TRUE(d.accepted) << i;
+      EXPECT_TRUE(passes) << i;
       EXPECT_EQ(d.best.id, uint64_t(i - 50));
       EXPECT_LT(d.best.distance, 0.02f);
       EXPECT_EQ(d.best.sequence_length, 5);
@@ -56,9 +58,9 @@ TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
     }
     if (i < 60)
     {
-      EXPECT_FALSE(d.accepted) << i;  // random descriptors are ~0.5 apart
+      EXPECT_FALSE(passes) << i;  // random descriptors are ~0.5 apart
     }
-    accepted += d.accepted;
+    accepted += passes;
   }
   EXPECT_GE(accepted, 16);
   EXPECT_LE(accepted, 22);
@@ -212,7 +214,7 @@ TEST(LoopDetector, AcceptanceNeedsAtLeastOneGateAndEverySetGate)
     Detection d;
     for (int i = 0; i <= 70; ++i)
       d = detector.process(frames[i]);
-    return d.accepted;
+    return openable_test::passesAcceptanceGate(c, d);
   };
   EXPECT_FALSE(acceptedAt70(-1, 0.0));     // no gate: nothing is accepted
   EXPECT_TRUE(acceptedAt70(0.2, 0.0));     // distance gate only

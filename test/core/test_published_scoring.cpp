@@ -10,7 +10,8 @@
 
 #include "openable/error.h"
 #include "openable/ground_truth_sources.h"
-#include "openable/decision_table.h"
+#include "openable/loop_csv.h"
+#include "openable/loop_list.h"
 #include "openable/published_scoring.h"
 
 namespace fs = std::filesystem;
@@ -266,4 +267,58 @@ TEST_F(PublishedFiles, ScoreCurveNeedsOneRowPerFrame)
   EXPECT_EQ(r.queries_without_prediction, 9);
   ASSERT_EQ(r.curve.size(), 1u);
   EXPECT_DOUBLE_EQ(r.curve[0].recall, 0.2);
+}
+
+// The one home of the format: what LoopCsvWriter writes is what both readers (loadDecisionTable for
+// openable_eval, loadLoopPairs for openable_trajectory) read.
+TEST_F(PublishedFiles, WhatTheWriterWritesTheReadersRead)
+{
+  openable::LoopCsvWriter writer(true);
+  openable::LoopCsvFrame early;
+  early.query = 0;
+  writer.add(early);  // no candidate: match -1, nan
+  openable::LoopCsvFrame loop;
+  loop.query = 5;
+  loop.match = 1;
+  loop.has_candidates = true;
+  loop.distance = 0.25f;
+  loop.score = 0.5f;
+  loop.status = openable::FrameStatus::Published;
+  loop.direction = -1;
+  loop.shift = 2;
+  loop.query_session = 3;
+  loop.match_session = 1;
+  writer.add(loop);
+  openable::LoopCsvFrame rival = loop;
+  rival.query = 6;
+  rival.status = openable::FrameStatus::NotUnique;
+  rival.pace = 1.5f;
+  writer.add(rival);
+  EXPECT_EQ(writer.decisions(),
+            "query,match,distance,score,status,accepted,pace\n"
+            "0,-1,nan,nan,too_early,0,nan\n"
+            "5,1,0.25,0.5,published,1,1\n"
+            "6,1,0.25,0.5,not_unique,0,1.5\n");
+  EXPECT_EQ(writer.loopClosures(),
+            "query,match,distance,score,status,direction,shift,query_session,match_session\n"
+            "5,1,0.25,0.5,published,-1,2,3,1\n");
+  EXPECT_EQ(openable::LoopCsvWriter(false).loopClosures(),
+            "query,match,distance,score,status,query_session,match_session\n");
+
+  const DecisionTable decisions = openable::loadDecisionTable(file("decisions.csv", writer.decisions()));
+  ASSERT_TRUE(decisions.per_frame);
+  ASSERT_EQ(decisions.rows.size(), 3u);
+  EXPECT_TRUE(std::isnan(decisions.rows[0].distance));
+  EXPECT_TRUE(decisions.rows[1].accepted);
+  EXPECT_EQ(decisions.rows[2].status, "not_unique");
+  const std::string loops = file("loop_closures.csv", writer.loopClosures());
+  const DecisionTable published = openable::loadDecisionTable(loops);
+  ASSERT_FALSE(published.per_frame);
+  ASSERT_EQ(published.rows.size(), 1u);
+  EXPECT_EQ(published.rows[0].query, 5);
+  EXPECT_EQ(published.rows[0].match, 1);
+  const std::vector<openable::LoopPair> pairs = openable::loadLoopPairs(loops);
+  ASSERT_EQ(pairs.size(), 1u);
+  EXPECT_EQ(pairs[0].query, 5);
+  EXPECT_EQ(pairs[0].match, 1);
 }

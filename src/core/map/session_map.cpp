@@ -122,6 +122,15 @@ std::string descriptorDifferences(const Config& a, const Config& b, const std::s
   return differences;
 }
 
+MapMismatch mapMismatch(const Config& a, const DescriptorLayout& a_layout, const Config& b,
+                        const DescriptorLayout& b_layout, const std::string& b_name)
+{
+  MapMismatch mismatch;
+  mismatch.keys = descriptorDifferences(a, b, b_name);
+  mismatch.layout = a_layout != b_layout;
+  return mismatch;
+}
+
 uint64_t descriptorHash(const Config& config)
 {
   uint64_t hash = 0xcbf29ce484222325ULL;
@@ -136,14 +145,15 @@ uint64_t descriptorHash(const Config& config)
 
 SessionMap SessionMap::merge(SessionMap into, const SessionMap& from)
 {
-  if (into.config_yaml_ != from.config_yaml_)
-  {
-    const std::string differences =
-        descriptorDifferences(Config::fromYamlString(into.config_yaml_), Config::fromYamlString(from.config_yaml_));
-    if (!differences.empty())
-      throw Error("cannot merge maps described with different configurations: " + differences);
-  }
-  if (into.layout_ != from.layout_)
+  // The same text describes the same way: parsed only when the texts differ.
+  const bool same_text = into.config_yaml_ == from.config_yaml_;
+  const MapMismatch mismatch = mapMismatch(same_text ? Config() : Config::fromYamlString(into.config_yaml_),
+                                           into.layout_,
+                                           same_text ? Config() : Config::fromYamlString(from.config_yaml_),
+                                           from.layout_);
+  if (!mismatch.keys.empty())
+    throw Error("cannot merge maps described with different configurations: " + mismatch.keys);
+  if (mismatch.layout)
     throw Error("cannot merge maps whose descriptor layouts differ");
   for (const SessionInfo& session : from.sessions_)
     if (into.findSession(session.name) >= 0)

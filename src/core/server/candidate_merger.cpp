@@ -44,14 +44,13 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
   out.servers = answers.size();
 
   std::vector<ServerCandidate> all;
-  bool own_excluded = false;
   size_t other_frames = 0;
   Detection& d = out.detection;
   for (const ServerCandidates& a : answers)
   {
     all.insert(all.end(), a.top.begin(), a.top.end());
     d.candidates += a.candidates;
-    own_excluded = own_excluded || a.own_excluded;
+    d.own_excluded = d.own_excluded || a.own_excluded;
     other_frames += a.other_frames;
     if (a.stored)
     {
@@ -78,18 +77,13 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
     out.top.push_back(n);
   }
   // As MapMatcher decides these, over the union.
-  d.excluded = d.top.empty() && own_excluded && other_frames == 0;
+  d.excluded = onlyExcludedPast(d, other_frames);
   if (!d.top.empty())
   {
     d.has_candidates = true;
     d.best = d.top.front();
-    if (all.size() < 2)
-      d.uniqueness = 1.0f;
-    else
-      d.uniqueness = all[1].distance > 0.0f ? 1.0f - d.best.distance / all[1].distance : 0.0f;
-    const bool gated = config_.threshold >= 0.0 || config_.min_uniqueness > 0.0;
-    d.accepted = gated && (config_.threshold < 0.0 || d.best.distance <= config_.threshold) &&
-                 d.uniqueness >= config_.min_uniqueness;
+    d.uniqueness =
+        matchUniqueness(d.best.distance, all.size() < 2 ? std::nullopt : std::optional<float>(all[1].distance));
   }
 
   LoopDecision& decision = decisions_.emplace(out.query_session, LoopDecision(config_)).first->second;

@@ -130,21 +130,6 @@ PlaceServer::Stream& PlaceServer::stream(const std::string& session)
   return s->second;
 }
 
-bool PlaceServer::ownExcluded(const PlaceDatabase& frames, double stamp) const
-{
-  // What MapMatcher calls the exclusion of the own session: frames exist, none outside the window. A merger
-  // needs it from the one server that holds the session (MapMatcher only reports it when the map holds
-  // nothing else).
-  if (frames.empty())
-    return false;
-  const size_t excluded = size_t(config_.exclusion_window);
-  if (frames.size() <= excluded)
-    return true;
-  if (config_.exclusion_seconds > 0.0 && stamp > 0.0)
-    return frames.stamp(0) > stamp - config_.exclusion_seconds;
-  return false;
-}
-
 ServerCandidate PlaceServer::named(const Candidate& c) const
 {
   ServerCandidate n;
@@ -202,7 +187,7 @@ ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
   if (own >= 0)
   {
     const PlaceDatabase& frames = map_.frames(uint32_t(own));
-    out.own_excluded = ownExcluded(frames, input.stamp);
+    out.own_excluded = detection.own_excluded;  // MapMatcher's exclusion: frames exist, none outside it
     out.other_frames -= frames.size();
   }
   if (owned)
@@ -234,10 +219,10 @@ void PlaceServer::load(const std::string& path)
 {
   SessionMap loaded = SessionMap::load(path);
   const Config theirs = Config::fromYamlString(loaded.configYaml());
-  const std::string differences = descriptorDifferences(config_, theirs, "the map");
-  if (!differences.empty())
-    throw Error("map '" + path + "' was described with another configuration: " + differences);
-  if (loaded.layout() != map_.layout())
+  const MapMismatch mismatch = mapMismatch(config_, map_.layout(), theirs, loaded.layout(), "the map");
+  if (!mismatch.keys.empty())
+    throw Error("map '" + path + "' was described with another configuration: " + mismatch.keys);
+  if (mismatch.layout)
     throw Error("map '" + path + "': its descriptor layout differs from this configuration's");
   map_ = std::move(loaded);
   streams_.clear();

@@ -1,21 +1,32 @@
-// Reader of openable_offline's loop_closures.csv and decisions.csv, strict so that a file from another
-// version of the tool fails loudly instead of being scored wrongly.
-#include "openable/decision_table.h"
+// openable_offline's loop_closures.csv and decisions.csv: the writer, and the reader, strict so that a file
+// from another version of the tool fails loudly instead of being scored wrongly.
+#include "openable/loop_csv.h"
 
 #include <algorithm>
 #include <cerrno>
 #include <climits>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "openable/error.h"
-#include "openable/loop_decision.h"
 
 namespace openable
 {
 namespace
 {
+/// A number as both files write it: 6 significant digits, "nan" for what is not finite.
+std::string formatFloat(float v)
+{
+  if (!std::isfinite(v))
+    return "nan";
+  std::ostringstream out;
+  out << std::setprecision(6) << v;
+  return out.str();
+}
+
 std::string trimmed(const std::string& text)
 {
   const size_t first = text.find_first_not_of(" \t\r");
@@ -106,6 +117,18 @@ std::string statusWords()
   return list;
 }
 
+/// A non-negative frame index that is all of `text` (spaces around allowed).
+bool parseFrame(const std::string& text, int& frame)
+{
+  std::istringstream in(text);
+  long value = -1;
+  std::string rest;
+  if (!(in >> value) || (in >> rest) || value < 0 || value > 2147483647L)
+    return false;
+  frame = static_cast<int>(value);
+  return true;
+}
+
 int parseIndex(const std::string& text, int minimum, const std::string& what, const std::string& where)
 {
   errno = 0;
@@ -158,6 +181,28 @@ DecisionRow parseRow(const std::vector<std::string>& f, const Columns& c, const 
 
 }  // namespace
 
+LoopCsvWriter::LoopCsvWriter(bool panoramic) : panoramic_(panoramic)
+{
+  loops_ << "query,match,distance,score,status" << (panoramic_ ? ",direction,shift" : "")
+         << ",query_session,match_session\n";
+  decisions_ << "query,match,distance,score,status,accepted,pace\n";
+}
+
+void LoopCsvWriter::add(const LoopCsvFrame& f)
+{
+  const bool published = f.status == FrameStatus::Published;
+  const auto known = [&f](float v) { return formatFloat(f.has_candidates ? v : NAN); };
+  decisions_ << f.query << "," << f.match << "," << known(f.distance) << "," << known(f.score) << ","
+             << toString(f.status) << "," << (published ? 1 : 0) << "," << known(f.pace) << "\n";
+  if (!published)
+    return;
+  loops_ << f.query << "," << f.match << "," << formatFloat(f.distance) << "," << formatFloat(f.score)
+         << ",published";
+  if (panoramic_)
+    loops_ << "," << f.direction << "," << f.shift;
+  loops_ << "," << f.query_session << "," << f.match_session << "\n";
+}
+
 DecisionTable loadDecisionTable(const std::string& path)
 {
   std::ifstream in(path);
@@ -197,6 +242,20 @@ DecisionTable loadDecisionTable(const std::string& path)
     table.rows.push_back(std::move(d));
   }
   return table;
+}
+
+bool isLoopCsvHeader(const std::string& line)
+{
+  return line.rfind("query,match", 0) == 0;
+}
+
+bool readLoopCsvPair(const std::string& line, int& query, int& match)
+{
+  const size_t first = line.find(',');
+  const size_t second = line.find(',', first == std::string::npos ? first : first + 1);
+  return first != std::string::npos && parseFrame(line.substr(0, first), query) &&
+         parseFrame(line.substr(first + 1, second == std::string::npos ? std::string::npos : second - first - 1),
+                    match);
 }
 
 }  // namespace openable
