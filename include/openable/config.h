@@ -60,6 +60,8 @@ struct Config
   int consistent_frames = 10;      ///< this many consecutive frames must pass the gates with matches advancing
                                    ///< together (1 = off)
   int consistency_tolerance = 2;   ///< frames a match may deviate from advancing one place per frame
+  double continue_uniqueness = 0.03;  ///< a published run goes on through frames this unique (below
+                                      ///< min_uniqueness) whose matches keep to its line (>= min_uniqueness: off)
   double exclusion_seconds = 0.0;  ///< loop-closure mode: frames stamped less than this before the query are
                                    ///< never matched (0 = off; the frame window still applies)
 

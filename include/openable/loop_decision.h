@@ -66,9 +66,12 @@ private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
   bool advancesWithRun(const Detection& detection) const;
   bool recentFramesFollowOneLine() const;
+  /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
+  bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
 
   Config config_;
   int run_ = 0;                   ///< consecutive frames (ending at the previous one) that passed and agree
+  bool published_ = false;        ///< the previous frame was published (its run is a loop)
   uint64_t run_start_match_ = 0;  ///< best match of the run's first frame
   uint64_t previous_match_ = 0;   ///< best match of the previous frame
   int previous_direction_ = 1;

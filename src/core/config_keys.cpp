@@ -163,6 +163,10 @@ const std::vector<KeyAccess>& table()
       makeKey("consistency_tolerance",
               "loop-closure decision: frames a match may deviate from advancing one place per frame",
               &Config::consistency_tolerance).range(0, 1000).live(),
+      makeKey("continue_uniqueness",
+              "loop-closure decision: a published run goes on through frames whose uniqueness is at least this "
+              "(below min_uniqueness) while their matches keep to its line (>= min_uniqueness = off)",
+              &Config::continue_uniqueness).range(0, 1).live(),
       makeKey("exclusion_seconds",
               "loop-closure mode: frames stamped less than this before the query are never matched (s; 0 = off)",
               &Config::exclusion_seconds).range(0, 1e9).live(),

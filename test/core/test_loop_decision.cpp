@@ -160,3 +160,45 @@ TEST(LoopDecision, EqualsANaiveReferenceOnRandomStreams)
     }
   }
 }
+
+TEST(LoopDecision, APublishedRunContinuesThroughLessUniqueFramesOnItsLineOnly)
+{
+  Config c = decisionConfig();  // min_uniqueness 0.1, 3 consistent frames, tolerance 1
+  c.continue_uniqueness = 0.03;
+  LoopDecision decision(c);
+  // A run may not START below min_uniqueness: 0.05 never publishes by itself.
+  EXPECT_EQ(decision.decide(candidate(10, 0.05f)), FrameStatus::NotUnique);
+  EXPECT_EQ(decision.decide(candidate(11, 0.05f)), FrameStatus::NotUnique);
+  EXPECT_EQ(decision.decide(candidate(20, 0.2f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(21, 0.2f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(22, 0.2f)), FrameStatus::Published);
+  // Published: a frame on the run's line goes on at continue_uniqueness.
+  EXPECT_EQ(decision.decide(candidate(23, 0.05f)), FrameStatus::Published);
+  EXPECT_EQ(decision.decide(candidate(24, 0.035f)), FrameStatus::Published);
+  // Below continue_uniqueness the run ends, and a new one needs min_uniqueness again.
+  EXPECT_EQ(decision.decide(candidate(25, 0.02f)), FrameStatus::NotUnique);
+  EXPECT_EQ(decision.decide(candidate(26, 0.05f)), FrameStatus::NotUnique);
+  EXPECT_EQ(decision.decide(candidate(40, 0.2f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(41, 0.2f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(42, 0.2f)), FrameStatus::Published);
+  // Off the line (a look-alike place elsewhere) it ends too, even when nearly unique enough.
+  EXPECT_EQ(decision.decide(candidate(90, 0.09f)), FrameStatus::NotUnique);
+  EXPECT_EQ(decision.decide(candidate(91, 0.09f)), FrameStatus::NotUnique);
+  // A distance gate still holds inside a run.
+  c.threshold = 0.3;
+  decision.setConfig(c);
+  for (uint64_t m = 50; m < 53; ++m)
+    decision.decide(candidate(m, 0.2f));
+  EXPECT_EQ(decision.decide(candidate(53, 0.05f, 100, 0.25f)), FrameStatus::Published);
+  EXPECT_EQ(decision.decide(candidate(54, 0.05f, 100, 0.35f)), FrameStatus::AboveThreshold);
+}
+
+TEST(LoopDecision, ContinuationIsOffAtOrAboveMinUniqueness)
+{
+  Config c = decisionConfig();
+  c.continue_uniqueness = c.min_uniqueness;
+  LoopDecision decision(c);
+  for (uint64_t m = 20; m < 23; ++m)
+    decision.decide(candidate(m, 0.2f));
+  EXPECT_EQ(decision.decide(candidate(23, 0.09f)), FrameStatus::NotUnique);
+}
