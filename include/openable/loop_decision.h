@@ -72,6 +72,7 @@ private:
   Config config_;
   int run_ = 0;                   ///< consecutive frames (ending at the previous one) that passed and agree
   bool published_ = false;        ///< the previous frame was published (its run is a loop)
+  double unique_distance_ = 0.0;  ///< distance of the last frame that passed the gates itself
   uint64_t run_start_match_ = 0;  ///< best match of the run's first frame
   uint64_t previous_match_ = 0;   ///< best match of the previous frame
   int previous_direction_ = 1;

@@ -184,12 +184,18 @@ TEST(LoopDecision, APublishedRunContinuesThroughLessUniqueFramesOnItsLineOnly)
   // Off the line (a look-alike place elsewhere) it ends too, even when nearly unique enough.
   EXPECT_EQ(decision.decide(candidate(90, 0.09f)), FrameStatus::NotUnique);
   EXPECT_EQ(decision.decide(candidate(91, 0.09f)), FrameStatus::NotUnique);
+  // A sequence growing worse than the run's last unique frame (by more than 5 %) is a camera leaving the
+  // route: the run ends.
+  for (uint64_t m = 60; m < 63; ++m)
+    EXPECT_NE(decision.decide(candidate(m, 0.2f, 100, 0.2f)), FrameStatus::NotUnique);
+  EXPECT_EQ(decision.decide(candidate(63, 0.05f, 100, 0.205f)), FrameStatus::Published);
+  EXPECT_EQ(decision.decide(candidate(64, 0.05f, 100, 0.25f)), FrameStatus::NotUnique);
   // A distance gate still holds inside a run.
   c.threshold = 0.3;
   decision.setConfig(c);
   for (uint64_t m = 50; m < 53; ++m)
     decision.decide(candidate(m, 0.2f));
-  EXPECT_EQ(decision.decide(candidate(53, 0.05f, 100, 0.25f)), FrameStatus::Published);
+  EXPECT_EQ(decision.decide(candidate(53, 0.05f, 100, 0.205f)), FrameStatus::Published);
   EXPECT_EQ(decision.decide(candidate(54, 0.05f, 100, 0.35f)), FrameStatus::AboveThreshold);
 }
 
