@@ -281,7 +281,7 @@ std::string formatFloat(float v)
 int run(const Options& options)
 {
   const openable::Config config = loadConfig(options);
-  openable::StagedOutput output(options.output);  // fails now, not after minutes of work, when DIR cannot be written
+  openable::StagedOutput output(options.output, "openable_offline");  // fails now, not after minutes of work, when DIR cannot be written
   const bool localisation = !options.query.empty();
   Timings timings;
 
