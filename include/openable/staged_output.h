@@ -15,7 +15,8 @@ namespace openable
 ///   staging folder is the sibling `<dir>.openable_staging.<pid>` and is exchanged with `dir` in one atomic
 ///   rename (Linux renameat2 RENAME_EXCHANGE): a kill -9 at any point leaves `dir` with the earlier set or
 ///   the new one, and the earlier set (now in the staging name) is removed;
-/// - when `dir` also holds files this set does not own (the user's, another tool's), only this set's files
+/// - when `dir` also holds files this set does not own (the user's, another tool's), or is a symbolic link
+///   or the working folder, only this set's files
 ///   are replaced, through a journal: the staging folder `<dir>/.openable_staging.<set>.<pid>` is renamed to
 ///   `<dir>/.openable_commit.<set>.<pid>` (the commit point, after which the new set is the one that
 ///   counts), then its files are moved into `dir`, the earlier set's files that the new one lacks removed,
@@ -47,6 +48,7 @@ public:
   static std::string manifestName(const std::string& set);
 
 private:
+  bool ownsFolder() const;
   void publishByExchange();
   void publishByJournal();
 

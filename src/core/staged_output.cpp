@@ -49,6 +49,16 @@ std::vector<std::string> readLines(const fs::path& path)
   return lines;
 }
 
+/// The names in folder `dir` (read first: the caller then moves them).
+std::vector<std::string> entries(const fs::path& dir)
+{
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    names.push_back(it->path().filename().string());
+  return names;
+}
+
 fs::path parentOf(const fs::path& dir)
 {
   return dir.has_parent_path() ? dir.parent_path() : fs::path(".");
@@ -66,16 +76,15 @@ void rollForward(const fs::path& commit, const fs::path& dir)
 {
   std::string manifest;
   std::error_code ec;
-  for (fs::directory_iterator it(commit, ec), end; !ec && it != end; it.increment(ec))
+  for (const std::string& name : entries(commit))
   {
-    const std::string name = it->path().filename().string();
     if (name == kJournal)
       continue;
     if (name.compare(0, sizeof(kManifest) - 1, kManifest) == 0)
       manifest = name;
     else
     {
-      renameOrThrow(it->path(), dir / name);
+      renameOrThrow(commit / name, dir / name);
       outputStep("set file moved");
     }
   }
@@ -136,8 +145,23 @@ void StagedOutput::recover(const std::string& dir_name)
   }
 }
 
+bool StagedOutput::ownsFolder() const
+{
+  std::error_code ec;
+  if (fs::is_symlink(dir_, ec) || fs::equivalent(dir_, fs::current_path(ec), ec))
+    return false;  // a link stays a link, the working folder stays in place: their files are replaced one by one
+  const std::vector<std::string> earlier = readLines(dir_ / manifestName(set_));
+  for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec))
+  {
+    const std::string name = it->path().filename().string();
+    if (name != manifestName(set_) && std::find(earlier.begin(), earlier.end(), name) == earlier.end())
+      return false;
+  }
+  return true;
+}
+
 StagedOutput::StagedOutput(const std::string& dir, const std::string& set)
-    : dir_(fs::path(dir).lexically_normal()), set_(set)
+    : dir_(fs::absolute(fs::path(dir)).lexically_normal()), set_(set)
 {
   if (!dir_.has_filename())
     dir_ = dir_.parent_path();
@@ -146,15 +170,7 @@ StagedOutput::StagedOutput(const std::string& dir, const std::string& set)
   recover(dir_.string());
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
     throw Error("cannot write into output folder '" + dir + "': it is a file");
-  // Owned: missing, or nothing in it but this set's earlier files.
-  const std::vector<std::string> earlier = readLines(dir_ / manifestName(set_));
-  exchange_ = true;
-  for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec))
-  {
-    const std::string name = it->path().filename().string();
-    if (name != manifestName(set_) && std::find(earlier.begin(), earlier.end(), name) == earlier.end())
-      exchange_ = false;
-  }
+  exchange_ = ownsFolder();  // missing, or nothing in it but this set's earlier files
   const std::string pid = std::to_string(::getpid());
   if (exchange_)
   {
@@ -225,11 +241,12 @@ void StagedOutput::publishByExchange()
     syncPath(parent.string());
     return;
   }
-  if (::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, dir_.c_str(), RENAME_EXCHANGE) != 0)
+  const bool owned = ownsFolder();  // someone may have put a file into the folder while the set was made
+  if (!owned || ::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, dir_.c_str(), RENAME_EXCHANGE) != 0)
   {
-    if (errno != EINVAL && errno != ENOSYS && errno != ENOTSUP)
+    if (owned && errno != EINVAL && errno != ENOSYS && errno != ENOTSUP)
       throw Error("cannot publish the output set in '" + dir_.string() + "': " + std::strerror(errno));
-    // A file system without the exchange: the journal in the folder, as for a shared folder.
+    // A shared folder now, or a file system without the exchange: the journal in the folder.
     const fs::path inside = dir_ / (kStaging + set_ + "." + std::to_string(::getpid()));
     renameOrThrow(staging_, inside);
     staging_ = inside;
@@ -240,6 +257,13 @@ void StagedOutput::publishByExchange()
   published_ = true;
   outputStep("set exchanged");
   syncPath(parent.string());
+  // The earlier folder: anything in it that its set does not own (put there after the check above) moves
+  // over to the new folder; the rest is the earlier set.
+  const std::vector<std::string> earlier = readLines(staging_ / manifestName(set_));
+  for (const std::string& name : entries(staging_))
+    if (name != manifestName(set_) && std::find(earlier.begin(), earlier.end(), name) == earlier.end() &&
+        !fs::exists(dir_ / name, ec))
+      fs::rename(staging_ / name, dir_ / name, ec);
   fs::remove_all(staging_, ec);  // the earlier set
   staging_.clear();
   outputStep("earlier set removed");

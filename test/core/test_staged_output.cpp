@@ -194,6 +194,29 @@ TEST_F(StagedOutputTest, SetsReplaceOnlyTheirOwnFiles)
   EXPECT_TRUE(leftovers(dir_).empty());
 }
 
+TEST_F(StagedOutputTest, AFileAddedWhileTheSetIsMadeAndALinkedFolderStay)
+{
+  writeSet(dir_, kOld);
+  {
+    openable::StagedOutput output(dir_.string(), "test_set");  // owned when it starts
+    for (const auto& [name, text] : kNew)
+      openable::writeFileAtomically(output.path(name), text);
+    std::ofstream(dir_ / "late.txt") << "put there during the run\n";
+    output.publish();
+  }
+  Files expected = kNew;
+  expected["late.txt"] = "put there during the run\n";
+  EXPECT_EQ(visible(dir_), expected);
+
+  fs::create_directory_symlink(dir_, root_ / "link");
+  writeSet(root_ / "link", kOld);
+  EXPECT_TRUE(fs::is_symlink(root_ / "link"));
+  expected = kOld;
+  expected["late.txt"] = "put there during the run\n";
+  EXPECT_EQ(visible(dir_), expected);
+  EXPECT_TRUE(leftovers(dir_).empty());
+}
+
 TEST_F(StagedOutputTest, AFailedWriteLeavesTheEarlierSetAndNoStagingFolder)
 {
   writeSet(dir_, kOld);

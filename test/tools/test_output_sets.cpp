@@ -63,7 +63,7 @@ std::vector<std::string> leftovers(const fs::path& dir)
     {
       const std::string name = it->path().filename().string();
       if (name.find(".openable_staging.") != std::string::npos || name.find(".openable_commit.") != std::string::npos ||
-          name.find(".tmp.") != std::string::npos)
+          name.find(".openable_output.") != std::string::npos || name.find(".tmp.") != std::string::npos)
         found.push_back(it->path().string());
     }
   return found;
