@@ -114,32 +114,39 @@ void StagedOutput::recover(const std::string& dir_name)
     dir = dir.parent_path();
   std::error_code ec;
   const std::string sibling = dir.filename().string() + kStaging;
-  for (fs::directory_iterator it(parentOf(dir), ec), end; !ec && it != end; it.increment(ec))
+  for (const std::string& name : entries(parentOf(dir)))
   {
-    const long pid = trailingPid(it->path().filename().string(), sibling);
+    const long pid = trailingPid(name, sibling);
     if (pid > 0 && !processAlive(pid))
-      fs::remove_all(it->path(), ec);  // staged (never exchanged) or the earlier set after the exchange
+      fs::remove_all(parentOf(dir) / name, ec);  // staged (never exchanged) or the earlier set after the exchange
   }
   ec.clear();
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+  // Temporary files are removed only where a set of this folder owns their name: a user's file stays.
+  std::set<std::string> owned;
+  const std::vector<std::string> names = entries(dir);
+  for (const std::string& name : names)
+    if (name.compare(0, sizeof(kManifest) - 1, kManifest) == 0)
+      for (const std::string& file : readLines(dir / name))
+        owned.insert(file);
+  for (const std::string& name : names)
   {
-    const std::string name = it->path().filename().string();
+    const fs::path path = dir / name;
     long pid = -1;
     if ((pid = trailingPid(name, kStaging)) > 0 || (pid = pidSuffix(name, ".openable_output.")) > 0)
     {
       if (!processAlive(pid))
-        fs::remove_all(it->path(), ec);  // never committed: the earlier set stands
+        fs::remove_all(path, ec);  // never committed: the earlier set stands
     }
     else if ((pid = trailingPid(name, kCommit)) > 0)
     {
       if (!processAlive(pid))
-        rollForward(it->path(), dir);  // committed: the new set stands
+        rollForward(path, dir);  // committed: the new set stands
     }
-    else if (name.find(".tmp.") != std::string::npos)
+    else if (name.find(".tmp.") != std::string::npos && owned.count(name.substr(0, name.rfind(".tmp."))))
     {
       pid = pidSuffix(name, name.substr(0, name.rfind(".tmp.") + 5));
       if (pid > 0 && !processAlive(pid))
-        fs::remove(it->path(), ec);
+        fs::remove(path, ec);
     }
     ec.clear();
   }

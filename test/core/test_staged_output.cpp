@@ -255,13 +255,15 @@ TEST_F(StagedOutputTest, LeftoversOfDeadRunsGoAtTheNextRunThoseOfLiveOnesStay)
   fs::create_directories(root_ / ("out.openable_staging." + d));
   fs::create_directories(dir_ / (".openable_staging.test_set." + d));
   fs::create_directories(dir_ / (".openable_output." + d));  // the staging folder of earlier versions
-  std::ofstream(dir_ / ("a.csv.tmp." + d)) << "half";
+  std::ofstream(dir_ / ("a.csv.tmp." + d)) << "half";  // a.csv is the set's
+  std::ofstream(dir_ / ("notes.tmp." + d)) << "the user's";  // not the set's: stays
   std::ofstream(root_ / ("map.bin.tmp." + d)) << "half a map";
   fs::create_directories(root_ / "out.openable_staging.1");  // pid 1 runs: not ours to remove
   writeSet(dir_, kNew);
   openable::writeFileAtomically((root_ / "map.bin").string(), "a map");
-  EXPECT_EQ(visible(dir_), kNew);
-  EXPECT_EQ(leftovers(dir_), std::vector<std::string>{(root_ / "out.openable_staging.1").string()});
+  EXPECT_EQ(visible(dir_, "notes.tmp." + d), kNew);
+  EXPECT_EQ(leftovers(dir_), (std::vector<std::string>{(dir_ / ("notes.tmp." + d)).string(),
+                                                       (root_ / "out.openable_staging.1").string()}));
   EXPECT_FALSE(fs::exists(root_ / ("map.bin.tmp." + d)));
   EXPECT_EQ(readText(root_ / "map.bin"), "a map");
 }
