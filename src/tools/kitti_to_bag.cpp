@@ -46,6 +46,7 @@
 #include <string>
 #include <vector>
 
+#include "openable/atomic_file.h"
 #include "openable/kitti.h"
 #include "openable/progress.h"
 
@@ -208,11 +209,12 @@ ros::Time stampOf(double seconds)
   return t;
 }
 
-// The bag is written beside --output under this name and renamed over it only when complete, so a failed
-// run leaves an existing bag as it was.
+// The bag is written beside --output under this name and renamed over it only when complete (fsynced), so a
+// failed or killed run leaves an existing bag as it was; temporaries of killed runs go at the next run.
 std::string temporaryBagPath(const std::string& output)
 {
-  return output + ".tmp." + std::to_string(::getpid());
+  static const std::string path = openable::temporaryPath(output);
+  return path;
 }
 
 int run(const Options& o, bool& bag_opened)
@@ -447,8 +449,7 @@ int run(const Options& o, bool& bag_opened)
   }
   progress.finish();
   bag.close();
-  if (std::rename(temporaryBagPath(o.output).c_str(), o.output.c_str()) != 0)
-    throw std::runtime_error("cannot move the new bag into place at " + o.output + ": " + std::strerror(errno));
+  openable::publishFile(temporaryBagPath(o.output), o.output);
   if (!o.quiet)
     std::cerr << "kitti_to_bag: wrote " << o.output << ": " << written << (o.stereo ? " stereo" : " mono") << " frames "
               << first << ".." << last << ", " << size.width << "x" << size.height << (o.color ? " bgr8" : " mono8")

@@ -20,6 +20,7 @@
 #include "openable/loop_csv.h"
 #include "openable/npy.h"
 #include "openable/progress.h"
+#include "openable/staged_output.h"
 #include "openable/published_scoring.h"
 #include "openable_eval_options.h"
 
@@ -75,14 +76,14 @@ openable::GroundTruth makeGroundTruth(const Options& o, int rows, int cols)
   return openable::posesGroundTruth(openable::loadKittiPositions(o.poses), o.distance, o.exclusion);
 }
 
-std::vector<bool> makeMask(const Options& o)
+std::vector<bool> makeMask(const Options& o, openable::StagedOutput& output)
 {
   if (!o.mask.empty())
     return openable::loadQueryMask(o.mask);
   if (!o.mask_dark.empty())
   {
     std::vector<bool> mask = openable::brightFrameMask(o.mask_dark);
-    openable::saveQueryMask((fs::path(o.output) / "query_mask.txt").string(), mask);
+    openable::saveQueryMask(output.path("query_mask.txt"), mask);
     return mask;
   }
   return {};
@@ -97,8 +98,8 @@ void printMetrics(const openable::EvaluationResult& r)
 
 int evaluate(const Options& o)
 {
-  fs::create_directories(o.output);
-  const std::vector<bool> mask = makeMask(o);
+  openable::StagedOutput output(o.output, "openable_eval");  // one set: a failed run leaves the earlier one
+  const std::vector<bool> mask = makeMask(o, output);
   std::vector<openable::PrPlotSeries> series;
   std::string json;
   const bool several = o.matrices.size() > 1;
@@ -109,7 +110,7 @@ int evaluate(const Options& o)
     const std::string name = i < o.names.size() ? o.names[i] : defaultName(o.matrices[i]);
     openable::EvaluationResult result = openable::evaluatePrecisionRecall(matrix, truth, mask);
     const std::string csv_name = several ? "pr_curve_" + fileSafe(name) + ".csv" : "pr_curve.csv";
-    openable::writeFileAtomically((fs::path(o.output) / csv_name).string(), openable::prCurveCsv(result));
+    openable::writeFileAtomically(output.path(csv_name), openable::prCurveCsv(result));
     json += (json.empty() ? "" : ", ") + openable::metricsJson(result, name, truth.description());
     if (several)
       std::cout << "name: " << name << "\n";
@@ -118,10 +119,11 @@ int evaluate(const Options& o)
   }
   if (several)
     json = "[" + json + "]";
-  openable::writeFileAtomically((fs::path(o.output) / "metrics.json").string(), json + "\n");
+  openable::writeFileAtomically(output.path("metrics.json"), json + "\n");
   std::vector<unsigned char> png;
   cv::imencode(".png", openable::drawPrCurves(series, o.title), png);
-  openable::writeFileAtomically((fs::path(o.output) / "pr_curve.png").string(), std::string(png.begin(), png.end()));
+  openable::writeFileAtomically(output.path("pr_curve.png"), std::string(png.begin(), png.end()));
+  output.publish();
   std::cout << json << std::endl;
   return 0;
 }
@@ -203,7 +205,7 @@ std::string publishedName(const std::string& path)
 /// Published loop closures (and, with decisions, the score curve) of one stream against a ground truth.
 int scorePublishedSet(const Options& o)
 {
-  fs::create_directories(o.output);
+  openable::StagedOutput output(o.output, "openable_eval");  // one set: a failed run leaves the earlier one
   const openable::DecisionTable published = openable::loadDecisionTable(o.published);
   std::optional<openable::DecisionTable> decisions;
   if (!o.decisions.empty())
@@ -227,15 +229,16 @@ int scorePublishedSet(const Options& o)
   if (decisions)
   {
     curve = openable::scorePrecisionRecall(*decisions, truth, frames);
-    openable::writeFileAtomically((fs::path(o.output) / "published_pr.csv").string(), openable::prCurveCsv(*curve));
+    openable::writeFileAtomically(output.path("published_pr.csv"), openable::prCurveCsv(*curve));
     std::vector<unsigned char> png;
     cv::imencode(".png", openable::drawPrCurves({{"score", *curve}}, o.title), png);
-    openable::writeFileAtomically((fs::path(o.output) / "published_pr.png").string(),
+    openable::writeFileAtomically(output.path("published_pr.png"),
                                   std::string(png.begin(), png.end()));
   }
   const std::string json =
       openable::publishedMetricsJson(score, curve ? &*curve : nullptr, publishedName(o.published), truth.description());
-  openable::writeFileAtomically((fs::path(o.output) / "metrics.json").string(), json + "\n");
+  openable::writeFileAtomically(output.path("metrics.json"), json + "\n");
+  output.publish();
   std::cout << "published: " << score.published << "\n"
             << "wrong: " << score.wrong() << "\n"
             << "precision: " << score.precision() << "\n"

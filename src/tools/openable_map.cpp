@@ -107,7 +107,7 @@ int exportCsv(const std::string& path, const std::string& dir)
   if (map.configYaml().empty())
     throw Error("map '" + path + "' carries no configuration, so its loop closures cannot be replayed");
   const openable::Config config = openable::Config::fromYamlString(map.configYaml());
-  openable::StagedOutput output(dir);
+  openable::StagedOutput output(dir, "openable_map_export");
 
   std::ostringstream frames;
   frames << "session,session_name,id,stamp,source,has_pose,x,y,z,qx,qy,qz,qw\n";

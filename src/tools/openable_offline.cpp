@@ -292,7 +292,7 @@ openable::LoopCsvFrame csvFrame(long query, long match, const openable::FrameOut
 int run(const Options& options)
 {
   const openable::Config config = loadConfig(options);
-  openable::StagedOutput output(options.output);  // fails now, not after minutes of work, when DIR cannot be written
+  openable::StagedOutput output(options.output, "openable_offline");  // fails now, not after minutes of work, when DIR cannot be written
   const bool localisation = !options.query.empty();
   Timings timings;
 

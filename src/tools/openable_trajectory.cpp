@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "openable/atomic_file.h"
+#include "openable/staged_output.h"
 #include "openable/error.h"
 #include "openable/evaluation.h"
 #include "openable/image_source.h"
@@ -190,10 +191,11 @@ std::vector<double> loadTimes(const std::string& path)
   return times;
 }
 
-void writeText(const fs::path& path, const std::string& text)
+/// Stages the output file `name` (published with the others at the end of the run).
+void writeText(openable::StagedOutput& output, const fs::path& dir, const std::string& name, const std::string& text)
 {
-  openable::writeFileAtomically(path.string(), text);
-  std::cout << "wrote " << path.string() << "\n";
+  openable::writeFileAtomically(output.path(name), text);
+  std::cout << "wrote " << (dir / name).string() << "\n";
 }
 
 int run(const Options& o)
@@ -221,7 +223,7 @@ int run(const Options& o)
   size_t agreeing = 0;
   for (const auto& loop : loops)
     agreeing += loop.agrees ? 1 : 0;
-  fs::create_directories(o.output);
+  openable::StagedOutput output(o.output, "openable_trajectory");  // one set: a failed run leaves the earlier one
   const std::string title = o.title.empty() ? fs::path(o.loops).filename().string() : o.title;
   std::cout << "loops: " << loops.size() << "\nagree with the ground truth: " << agreeing
             << "\ndisagree: " << loops.size() - agreeing << "\nground truth: " << truth.description() << "\n";
@@ -231,8 +233,8 @@ int run(const Options& o)
     const openable::TrajectoryPlot plot(positions, o.size);
     std::vector<unsigned char> png;
     cv::imencode(".png", plot.draw(loops, title), png);
-    writeText(fs::path(o.output) / "trajectory.png", std::string(png.begin(), png.end()));
-    writeText(fs::path(o.output) / "trajectory.csv", openable::trajectoryCsv(positions, stamps, loops));
+    writeText(output, o.output, "trajectory.png", std::string(png.begin(), png.end()));
+    writeText(output, o.output, "trajectory.csv", openable::trajectoryCsv(positions, stamps, loops));
   }
   if (!o.geo.empty())
   {
@@ -241,8 +243,9 @@ int run(const Options& o)
     if (skipped > 0)
       std::cerr << "openable_trajectory: " << skipped << " loops name a frame without geographic position in '" << o.geo
                 << "'; left out of the KML\n";
-    writeText(fs::path(o.output) / "trajectory.kml", kml);
+    writeText(output, o.output, "trajectory.kml", kml);
   }
+  output.publish();
   return 0;
 }
 
