@@ -133,7 +133,7 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
   // line (advancesWithRun, then the line of the last frames) is the revisit going on, even where a look-alike
   // neighbour makes it less unique than a run's first frames must be. Measured on Gardens Point day -> night
   // (default.yaml): uniqueness dips break a run for 10 to 20 frames, and each break costs consistent_frames
-  // more to start again; recall 0.56 -> 0.8, 0 wrong (doc/results.md).
+  // more to start again; recall 0.56 -> 0.785, 0 wrong (doc/results.md).
   // Nor may the sequence grow worse than the run's last unique frame by more than 5 %: a camera
   // that leaves the route (or a stream that jumps) keeps its old sequence a few frames, matching the end of
   // the route with a rising distance (measured: 0.288 after 0.265 in test_map_sessions' jump).
