@@ -1,6 +1,7 @@
 #include "openable/sequence_gaps.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace openable
@@ -9,13 +10,15 @@ uint64_t SequenceGaps::missingFromStamps(const Input& input, double step)
 {
   if (input.steps.size() < kMinSteps)
     return 0;
-  std::vector<double> sorted(input.steps.begin(), input.steps.end());
-  std::sort(sorted.begin(), sorted.end());
+  // On the stack: this runs for every unnumbered frame.
+  std::array<double, kStepWindow> steps{};
+  const auto end = std::copy(input.steps.begin(), input.steps.end(), steps.begin());
+  std::sort(steps.begin(), end);
   // The period: the typical single step, i.e. the median of the steps within 1.5x the shortest one (steps
   // under a fifth of the median are jitter or a repeated frame, not a period).
-  const double median = sorted[sorted.size() / 2];
-  const auto shortest = std::lower_bound(sorted.begin(), sorted.end(), 0.2 * median);
-  const auto singles_end = std::upper_bound(shortest, sorted.end(), 1.5 * *shortest);
+  const double median = steps[static_cast<size_t>(end - steps.begin()) / 2];
+  const auto shortest = std::lower_bound(steps.begin(), end, 0.2 * median);
+  const auto singles_end = std::upper_bound(shortest, end, 1.5 * *shortest);
   const double period = *(shortest + (singles_end - shortest - 1) / 2);
   // Half a period of jitter either way is still one step.
   if (!(period > 0.0) || step < 1.5 * period)

@@ -17,51 +17,19 @@
 #include "openable/atomic_file.h"
 #include "openable/error.h"
 #include "openable/staged_output.h"
+#include "output_set_files.h"
 
 namespace fs = std::filesystem;
 
 namespace
 {
-using Files = std::map<std::string, std::string>;
+using openable_test::Files;
+using openable_test::leftovers;
+using openable_test::readText;
+using openable_test::visible;
 
 const Files kOld = {{"a.csv", "old a\n"}, {"b.png", std::string(3000, 'o')}, {"only_old.txt", "old\n"}};
 const Files kNew = {{"a.csv", "new a\n"}, {"b.png", std::string(5000, 'n')}, {"only_new.txt", "new\n"}};
-
-std::string readText(const fs::path& path)
-{
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-/// The files of `dir` a reader sees (the set's bookkeeping, names starting with ".openable", left out).
-Files visible(const fs::path& dir, const std::string& skip = "")
-{
-  Files files;
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
-  {
-    const std::string name = it->path().filename().string();
-    if (name.rfind(".openable", 0) != 0 && name != skip)
-      files[name] = readText(it->path());
-  }
-  return files;
-}
-
-/// Names in `dir` and beside it that only an unfinished run leaves.
-std::vector<std::string> leftovers(const fs::path& dir)
-{
-  std::vector<std::string> found;
-  std::error_code ec;
-  for (const fs::path& folder : {dir, dir.parent_path()})
-    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
-    {
-      const std::string name = it->path().filename().string();
-      if (name.find(".openable_staging.") != std::string::npos || name.find(".openable_commit.") != std::string::npos ||
-          name.find(".openable_output.") != std::string::npos || name.find(".tmp.") != std::string::npos)
-        found.push_back(it->path().string());
-    }
-  return found;
-}
 
 void writeSet(const fs::path& dir, const Files& files)
 {
@@ -132,7 +100,7 @@ protected:
       writeSet(dir_, kOld);
       if (!killedWriting(dir_, step))
       {
-        EXPECT_EQ(visible(dir_, "user.txt"), kNew);
+        EXPECT_EQ(visible(dir_, {"user.txt"}), kNew);
         break;
       }
       ++kills;
@@ -141,7 +109,7 @@ protected:
         EXPECT_TRUE(visible(dir_) == kOld || visible(dir_) == kNew) << "killed at step " << step;
       }
       openable::StagedOutput::recover(dir_.string());  // what the next run does first
-      const Files seen = visible(dir_, "user.txt");
+      const Files seen = visible(dir_, {"user.txt"});
       EXPECT_TRUE(seen == kOld || seen == kNew) << "killed at step " << step;
       old_seen += seen == kOld;
       new_seen += seen == kNew;
@@ -151,7 +119,7 @@ protected:
         EXPECT_EQ(readText(dir_ / "user.txt"), "the user's\n");
       }
       writeSet(dir_, kNew);  // the next run
-      EXPECT_EQ(visible(dir_, "user.txt"), kNew);
+      EXPECT_EQ(visible(dir_, {"user.txt"}), kNew);
       EXPECT_TRUE(leftovers(dir_).empty());
     }
     std::cout << (shared ? "shared folder (journal): " : "owned folder (exchange): ") << kills
@@ -261,7 +229,7 @@ TEST_F(StagedOutputTest, LeftoversOfDeadRunsGoAtTheNextRunThoseOfLiveOnesStay)
   fs::create_directories(root_ / "out.openable_staging.1");  // pid 1 runs: not ours to remove
   writeSet(dir_, kNew);
   openable::writeFileAtomically((root_ / "map.bin").string(), "a map");
-  EXPECT_EQ(visible(dir_, "notes.tmp." + d), kNew);
+  EXPECT_EQ(visible(dir_, {"notes.tmp." + d}), kNew);
   EXPECT_EQ(leftovers(dir_), (std::vector<std::string>{(dir_ / ("notes.tmp." + d)).string(),
                                                        (root_ / "out.openable_staging.1").string()}));
   EXPECT_FALSE(fs::exists(root_ / ("map.bin.tmp." + d)));

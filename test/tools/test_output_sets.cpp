@@ -25,49 +25,17 @@
 
 #include "openable/npy.h"
 #include "openable/staged_output.h"
+#include "../core/output_set_files.h"
 #include "../core/test_util.h"
 
 namespace fs = std::filesystem;
 
 namespace
 {
-using Files = std::map<std::string, std::string>;
-
-std::string readText(const fs::path& path)
-{
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-/// What a reader sees in `dir`: its files but the set's bookkeeping (".openable...") and `skip`.
-Files visible(const fs::path& dir, const std::vector<std::string>& skip = {})
-{
-  Files files;
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
-  {
-    const std::string name = it->path().filename().string();
-    if (name.rfind(".openable", 0) != 0 && std::find(skip.begin(), skip.end(), name) == skip.end() &&
-        fs::is_regular_file(it->path()))
-      files[name] = readText(it->path());
-  }
-  return files;
-}
-
-std::vector<std::string> leftovers(const fs::path& dir)
-{
-  std::vector<std::string> found;
-  std::error_code ec;
-  for (const fs::path& folder : {dir, dir.parent_path()})
-    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
-    {
-      const std::string name = it->path().filename().string();
-      if (name.find(".openable_staging.") != std::string::npos || name.find(".openable_commit.") != std::string::npos ||
-          name.find(".openable_output.") != std::string::npos || name.find(".tmp.") != std::string::npos)
-        found.push_back(it->path().string());
-    }
-  return found;
-}
+using openable_test::Files;
+using openable_test::leftovers;
+using openable_test::readText;
+using openable_test::visible;
 
 /// Starts `binary arguments` (output to /dev/null) as a child of its own: its pid.
 pid_t start(const std::string& binary, const std::string& arguments, long file_size_limit = 0)
