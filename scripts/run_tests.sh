@@ -52,5 +52,13 @@ if command -v aarch64-linux-gnu-g++ > /dev/null || [ "$(uname -m)" = aarch64 ]; 
     fi
   fi
 fi
+
+# One more test: no header outside the C/C++ library, OpenCV, yaml-cpp, Eigen, Ceres and the core's own
+# reached the core's objects (ROS's headers share /usr/include on Debian, so no include path can keep them out).
+tests=$((tests + 1))
+if ! python3 "$root/scripts/check_core_ros_free.py" "$PWD"; then
+  failures=$((failures + 1))
+  failed=$((failed + 1))
+fi
 echo "$((tests - errors - failures)) passed, $failed failed"
 [ $failed -eq 0 ] && [ $results_rc -eq 0 ]

@@ -10,7 +10,7 @@
 #include <fstream>
 
 #include "config_keys.h"
-#include "openable/descriptor_extractor.h"
+#include "openable/descriptors/descriptor_extractor.h"
 #include "openable/error.h"
 
 namespace openable

@@ -19,11 +19,11 @@
 #include <vector>
 
 #include "config_benchmarks.h"
-#include "openable/frame_describer.h"
-#include "openable/frame_metric.h"
-#include "openable/hamming.h"
-#include "openable/place_database.h"
-#include "openable/sequence_matcher.h"
+#include "openable/description/frame_describer.h"
+#include "openable/matching/frame_metric.h"
+#include "openable/hamming/hamming.h"
+#include "openable/map/place_database.h"
+#include "openable/matching/sequence_matcher.h"
 
 namespace
 {

@@ -8,12 +8,12 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 
-#include "openable/descriptor_implementations.h"
+#include "descriptors/descriptor_implementations.h"
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/ldb.h"
-#include "openable/preprocessor.h"
-#include "openable/stereo.h"
+#include "openable/description/frame_describer.h"
+#include "openable/descriptors/ldb.h"
+#include "openable/description/preprocessor.h"
+#include "openable/description/stereo.h"
 #include "test_util.h"
 
 using namespace openable;

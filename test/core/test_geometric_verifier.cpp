@@ -8,7 +8,7 @@
 
 #include "euroc_revisits.h"
 #include "openable/error.h"
-#include "openable/geometric_verifier.h"
+#include "openable/verification/geometric_verifier.h"
 
 namespace
 {

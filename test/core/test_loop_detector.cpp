@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "openable/error.h"
-#include "openable/loop_detector.h"
+#include "openable/detection/loop_detector.h"
 #include "acceptance_gate.h"
 #include "test_util.h"
 

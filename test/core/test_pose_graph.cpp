@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "openable/error.h"
-#include "openable/pose_graph.h"
+#include "openable/pose_graph/pose_graph.h"
 
 namespace
 {

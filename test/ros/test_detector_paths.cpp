@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/trajectory_export.h"
+#include "openable/view/trajectory_export.h"
 #include "test_helpers.h"
 
 using openable_ros_test::DiagnosticsWatcher;

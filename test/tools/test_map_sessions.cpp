@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "../core/test_util.h"
-#include "openable/frame_describer.h"
-#include "openable/session_map.h"
+#include "openable/description/frame_describer.h"
+#include "openable/map/session_map.h"
 #include "run_tool.h"
 
 namespace fs = std::filesystem;

@@ -2,7 +2,7 @@
 #include <cstring>
 #include <vector>
 
-#include "openable/descriptor_implementations.h"
+#include "descriptors/descriptor_implementations.h"
 
 namespace openable
 {

@@ -1,9 +1,9 @@
-#include "openable/place_server.h"
+#include "openable/server/place_server.h"
 
 #include <algorithm>
 #include <sstream>
 
-#include "openable/frame_describer.h"
+#include "openable/description/frame_describer.h"
 
 namespace openable
 {
