@@ -26,6 +26,10 @@ cv::Mat normalizeBlocks(const cv::Mat& image, int block);
 /// patch; grid description splits the image into grid_x x grid_y cells; panoramic images are split into
 /// `panoramas` vertical sub-panoramas (each of them split into the grid). Cells are returned row by row,
 /// sub-panorama by sub-panorama (sub-panorama-major). Patches are CV_32F.
+/// Cells across (grid columns, times the sub-panoramas) and down one image under `config`.
+int cellsAcross(const Config& config);
+int cellsDown(const Config& config);
+
 class Preprocessor
 {
 public:

@@ -1,5 +1,5 @@
-// The interface every descriptor implements (DescriptorExtractor, over a Patch), the descriptor names and
-// the factory that builds one by name. The implementations: openable/descriptor_implementations.h, ldb.h.
+// The interface every descriptor implements (DescriptorExtractor, over a Patch). The descriptors themselves
+// and their factories: openable/descriptors/descriptor_registry.h.
 #pragma once
 
 #include <cstdint>
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/config.h"
+#include "openable/descriptors/descriptor_layout.h"
 
 namespace openable
 {
@@ -42,18 +42,5 @@ public:
     return 8;
   }
 };
-
-/// Names accepted by createDescriptorExtractor.
-const std::vector<std::string>& descriptorNames();
-
-/// The extractor named by config.descriptor. Throws Error for an unknown name (listing the valid ones),
-/// for D-LDB outside stereo mode, or for a patch_size the extractor cannot use.
-std::unique_ptr<DescriptorExtractor> createDescriptorExtractor(const Config& config);
-
-/// Words of 64 bits holding `bits` bits.
-inline int wordsForBits(int bits)
-{
-  return (bits + 63) / 64;
-}
 
 }  // namespace openable

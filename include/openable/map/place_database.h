@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/description/frame_describer.h"
+#include "openable/descriptors/descriptor_layout.h"
 #include "openable/io/source_names.h"
 
 namespace openable

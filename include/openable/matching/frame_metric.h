@@ -3,7 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "openable/description/frame_describer.h"
+#include "openable/descriptors/descriptor_layout.h"
 
 namespace openable
 {

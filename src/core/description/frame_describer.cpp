@@ -4,51 +4,45 @@
 #include <cstdint>
 #include <cstring>
 
+#include "openable/descriptors/descriptor_registry.h"
 #include "openable/error.h"
 
 namespace openable
 {
-uint32_t DescriptorLayout::maxCellDistance() const
-{
-  return binary ? static_cast<uint32_t>(cell_length) : kFloatScale;
-}
-
-std::string DescriptorLayout::check() const
-{
-  const std::string fields = std::string(binary ? "binary" : "float") + " layout (cell_length " +
-                             std::to_string(cell_length) + ", cell_words " + std::to_string(cell_words) + ", cells " +
-                             std::to_string(cells) + ", blocks " + std::to_string(blocks) + ")";
-  if (cell_length <= 0 || cell_words <= 0 || cells <= 0 || blocks <= 0)
-    return fields + ": every field must be positive";
-  // The words a cell needs follow from its length; a mismatch makes FrameMetric read past the cell.
-  // (Division, not wordsForBits: cell_length + 63 overflows for a corrupt length near INT_MAX.)
-  const int expected_words = binary ? cell_length / 64 + (cell_length % 64 != 0) : cell_length / 2 + cell_length % 2;
-  if (cell_words != expected_words)
-    return fields + ": " + std::to_string(cell_length) + (binary ? " bits" : " floats") + " need " +
-           std::to_string(expected_words) + " words per cell";
-  if (blocks > kMaxBlocks || cells % blocks != 0)
-    return fields + ": cells must split into at most " + std::to_string(kMaxBlocks) + " equal blocks";
-  if (frameWords() > kMaxFrameWords)
-    return fields + ": " + std::to_string(frameWords()) + " words per frame; at most " +
-           std::to_string(kMaxFrameWords) + " are supported";
-  // FrameMetric sums cell distances of a frame in 32 bits.
-  if (maxFrameDistance() > UINT32_MAX)
-    return fields + ": the largest frame distance " + std::to_string(maxFrameDistance()) + " does not fit 32 bits";
-  return "";
-}
-
-FrameDescriber::FrameDescriber(const Config& config) : config_(config), preprocessor_(config)
+DescriptorLayout descriptorLayout(const Config& config)
 {
   config.validateOrThrow();
-  extractor_ = createDescriptorExtractor(config);
-  layout_.binary = extractor_->isBinary();
-  layout_.cell_length = extractor_->length();
-  layout_.cell_words = layout_.binary ? wordsForBits(layout_.cell_length) : (layout_.cell_length + 1) / 2;
-  layout_.cells = preprocessor_.cellCount();
-  layout_.blocks = config.camera_type == "panoramic" ? config.panoramas : 1;
-  const std::string problem = layout_.check();
+  const DescriptorInfo& row = descriptorInfo(config.descriptor);
+  DescriptorLayout layout;
+  layout.binary = row.binary();
+  layout.cell_length = row.length;
+  layout.cell_words = layout.binary ? wordsForBits(layout.cell_length) : (layout.cell_length + 1) / 2;
+  layout.cells = cellsAcross(config) * cellsDown(config);
+  layout.blocks = config.camera() == CameraType::Panoramic ? config.panoramas : 1;
+  const std::string problem = layout.check();
   if (!problem.empty())
     throw Error("the configuration gives an unsupported descriptor " + problem);
+  return layout;
+}
+
+std::unique_ptr<DescriptorExtractor> createDescriptorExtractor(const Config& config)
+{
+  const DescriptorInfo& row = descriptorInfo(config.descriptor);
+  if (row.needs_disparity && config.camera() != CameraType::Stereo)
+    throw Error("descriptor " + config.descriptor + " describes disparity and needs camera_type stereo (got " +
+                config.camera_type + ")");
+  if (config.patch_size < row.min_patch_size)
+    throw Error("patch_size " + std::to_string(config.patch_size) + " is too small for " + row.name +
+                "; expected at least " + std::to_string(row.min_patch_size));
+  return row.create(config.patch_size);
+}
+
+FrameDescriber::FrameDescriber(const Config& config)
+  : config_(config), preprocessor_(config), layout_(descriptorLayout(config)), extractor_(createDescriptorExtractor(config))
+{
+  // The registry's row and the extractor it builds must agree (test_descriptors checks every row).
+  if (extractor_->isBinary() != layout_.binary || extractor_->length() != layout_.cell_length)
+    throw Error("descriptor " + config.descriptor + ": its registry row does not match its extractor");
 }
 
 FrameDescriptor FrameDescriber::describe(const std::vector<Patch>& patches) const

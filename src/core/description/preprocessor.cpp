@@ -79,15 +79,25 @@ cv::Mat illuminationInvariant(const cv::Mat& bgr, double alpha)
 
 Preprocessor::Preprocessor(const Config& config) : config_(config) {}
 
+int cellsAcross(const Config& config)
+{
+  const int grid = config.description() == DescriptionType::Grid ? config.grid_x : 1;
+  return config.camera() == CameraType::Panoramic ? config.panoramas * grid : grid;
+}
+
+int cellsDown(const Config& config)
+{
+  return config.description() == DescriptionType::Grid ? config.grid_y : 1;
+}
+
 int Preprocessor::cellsAcross() const
 {
-  const int grid = config_.description_type == "grid" ? config_.grid_x : 1;
-  return config_.camera_type == "panoramic" ? config_.panoramas * grid : grid;
+  return openable::cellsAcross(config_);
 }
 
 int Preprocessor::cellsDown() const
 {
-  return config_.description_type == "grid" ? config_.grid_y : 1;
+  return openable::cellsDown(config_);
 }
 
 void Preprocessor::checkInput(const cv::Mat& image, const char* what) const
@@ -133,7 +143,7 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
 
 std::vector<Patch> Preprocessor::patchesFromCameras(const std::vector<cv::Mat>& images) const
 {
-  if (config_.camera_type != "panoramic")
+  if (config_.camera() != CameraType::Panoramic)
     throw Error("a multi-camera frame needs camera_type panoramic");
   if (static_cast<int>(images.size()) != config_.panoramas)
     throw Error("a multi-camera frame has " + std::to_string(images.size()) + " images; expected panoramas = " +
@@ -204,7 +214,7 @@ std::vector<Patch> Preprocessor::split(const cv::Mat& intensity, const cv::Mat& 
 {
   const int p = config_.patch_size;
   const int down = cellsDown();
-  const int grid_x = config_.description_type == "grid" ? config_.grid_x : 1;
+  const int grid_x = config_.description() == DescriptionType::Grid ? config_.grid_x : 1;
   const int blocks = across / grid_x;
   std::vector<Patch> out;
   out.reserve(across * down);

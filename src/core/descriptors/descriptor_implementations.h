@@ -209,6 +209,7 @@ class HogExtractor : public DescriptorExtractor
 public:
   static constexpr int kCells = 4;
   static constexpr int kBins = 9;
+  static constexpr int kLength = (kCells - 1) * (kCells - 1) * 4 * kBins;
   explicit HogExtractor(int patch_size);
   std::string name() const override
   {
@@ -220,7 +221,7 @@ public:
   }
   int length() const override
   {
-    return (kCells - 1) * (kCells - 1) * 4 * kBins;
+    return kLength;
   }
   void describeFloat(const Patch& patch, float* values) const override;
 
@@ -229,33 +230,6 @@ private:
   int patch_size_;
   int window_;
   std::shared_ptr<const Blocks> blocks_;
-};
-
-/// HOG-B: the compact binary signature. HOG as HogExtractor computes it (324 values), each bit 1 when its
-/// value is above the descriptor's own lower median (the 162nd smallest value), so about half the bits are
-/// set. 324 bits in 6 words (48 bytes a place; HOG is 1,296), matched with Hamming distance. Training-free
-/// and deterministic; measured against HOG, LDB and other binarisations in doc/results.md.
-class HogBinaryExtractor : public DescriptorExtractor
-{
-public:
-  static constexpr int kBits = (HogExtractor::kCells - 1) * (HogExtractor::kCells - 1) * 4 * HogExtractor::kBins;
-  explicit HogBinaryExtractor(int patch_size);
-  std::string name() const override
-  {
-    return "HOG-B";
-  }
-  bool isBinary() const override
-  {
-    return true;
-  }
-  int length() const override
-  {
-    return kBits;
-  }
-  void describeBinary(const Patch& patch, uint64_t* words) const override;
-
-private:
-  HogExtractor hog_;
 };
 
 /// D-LDB (paper section II-C): LDB of the intensity patch, then LDB of the disparity patch over its valid

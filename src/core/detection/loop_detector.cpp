@@ -7,11 +7,6 @@ namespace openable
 {
 namespace
 {
-DescriptorLayout layoutFor(const Config& config)
-{
-  return FrameDescriber(config).layout();
-}
-
 size_t capacityFor(const Config& config)
 {
   return config.max_history > 0 ? static_cast<size_t>(config.max_history) : 0;
@@ -22,7 +17,7 @@ size_t capacityFor(const Config& config)
 SessionMap checkedMap(const Config& config, SessionMap map, MapMode mode)
 {
   config.validateOrThrow();
-  if (map.layout() != layoutFor(config))
+  if (map.layout() != descriptorLayout(config))
     throw Error(
         "the map's descriptors do not match this configuration (descriptor, patch_size, grid, panoramas or "
         "camera_type differ)");
@@ -33,7 +28,7 @@ SessionMap checkedMap(const Config& config, SessionMap map, MapMode mode)
 }  // namespace
 
 LoopDetector::LoopDetector(const Config& config, SessionInfo session)
-  : LoopDetector(config, SessionMap(layoutFor(config), config.toYaml()), MapMode::Continue, std::move(session))
+  : LoopDetector(config, SessionMap(descriptorLayout(config), config.toYaml()), MapMode::Continue, std::move(session))
 {
 }
 

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "openable/descriptors/descriptor_registry.h"
 #include "openable/error.h"
 #include "openable/description/input_contract.h"
 #include "openable/description/stereo.h"
@@ -97,7 +98,7 @@ OnlineDetector::OnlineDetector(const Config& config, SessionMap map, MapMode mod
 std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
 {
   const Preprocessor& pre = describer_.preprocessor();
-  if (config_.camera_type == "panoramic" && !input.cameras.empty())
+  if (config_.camera() == CameraType::Panoramic && !input.cameras.empty())
   {
     for (size_t i = 0; i < input.cameras.size(); ++i)
     {
@@ -112,12 +113,12 @@ std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
   const InputProblem size = checkImageSize(input.image.cols, input.image.rows);
   if (!size.ok())
     throw FrameRefused(size.reason, size.what);
-  if (config_.descriptor != "D-LDB")
+  if (!descriptorInfo(config_.descriptor).needs_disparity)
     return pre.patches(input.image);  // stereo with a mono descriptor: the left image only, no SGBM cost
   if (!input.disparity.empty())
     return pre.patchesWithDisparity(input.image, disparityFromImage(input.disparity));
   if (input.right.empty())
-    throw Error("descriptor D-LDB needs the right image or a disparity image besides the left one");
+    throw Error("descriptor " + config_.descriptor + " needs the right image or a disparity image besides the left one");
   return pre.patchesWithDisparity(input.image, disparityFromPair(input.image, input.right, config_));
 }
 

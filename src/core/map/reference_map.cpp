@@ -31,7 +31,7 @@ SessionMap loadReferenceMap(const std::string& path, const Config& config)
     throw Error(refused + "its configuration cannot be read (" + e.what() + ")");
   }
   const MapMismatch mismatch =
-      mapMismatch(map_config, map.layout(), config, FrameDescriber(config).layout(), "running");
+      mapMismatch(map_config, map.layout(), config, descriptorLayout(config), "running");
   if (!mismatch.keys.empty())
     throw Error(refused + "it was built with an incompatible configuration: " + mismatch.keys);
   if (mismatch.layout)

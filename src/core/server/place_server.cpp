@@ -33,7 +33,7 @@ PlaceServer::PlaceServer(const Config& config, std::vector<std::string> owned, s
     owned_(std::move(owned)),
     name_(std::move(name)),
     hash_(descriptorHash(config)),
-    map_(FrameDescriber(config).layout(), config.toYaml())
+    map_(descriptorLayout(config), config.toYaml())
 {
 }
 
