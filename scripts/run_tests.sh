@@ -3,7 +3,7 @@
 # catkin workspace, prints the failures and catkin_test_results' summary, and ends with the plain line
 # "N passed, N failed". Exits non-zero when a test failed, errored or did not produce a result.
 set -o pipefail  # no -u: ROS setup scripts read unset variables
-ws=${1:?usage: run_tests.sh CATKIN_WORKSPACE}
+ws=$(cd "${1:?usage: run_tests.sh CATKIN_WORKSPACE}" && pwd)
 root=$(cd "$(dirname "$0")/.." && pwd)
 log=$root/build/run_tests.log
 export PATH=/usr/bin:/bin:$PATH ROS_HOME=$root/build/ros_home ROS_LOG_DIR=$root/build/ros_home/log
