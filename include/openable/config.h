@@ -28,6 +28,26 @@ enum class DescriptionType
   Grid     ///< grid_x x grid_y patches
 };
 
+/// One rule a configuration breaks, as a value: the keys it involves (one, or each key of a rule across
+/// keys), the value found and what was expected. message() is the text validate() gives.
+struct ConfigProblem
+{
+  std::vector<std::string> keys;
+  std::string value;
+  std::string expected;
+
+  /// "key: value 'x' is not allowed; expected ..." (the keys joined with '/').
+  std::string message() const;
+};
+
+/// What Config::sanitized() did about one problem: the keys it reset to the fallback's values (none when
+/// every key of the problem is one it may not reset).
+struct ConfigRepair
+{
+  ConfigProblem problem;
+  std::vector<std::string> reset_keys;
+};
+
 /// Every parameter of the toolbox. The same snake_case keys are used in YAML files, on the command line
 /// (`--set key=value`) and as private ROS parameters of the nodelets. The member defaults are
 /// config/default.yaml's values (a test keeps them equal), so a bare nodelet, `openable_offline` without
@@ -105,9 +125,17 @@ struct Config
   int verify_stereo_max_hamming = 50;             ///< stereo depth: left/right descriptor distance allowed
   int verify_min_stereo_points = 30;              ///< stereo: fewer match-frame keypoints with depth: rejected
 
-  /// Errors of the form "key: value 'x' is not allowed; expected ...". Empty when valid. Besides each
-  /// key's range, refuses combinations whose images need more than kMaxWorkingBytesPerFrame per frame.
+  /// Every rule this configuration breaks; empty when valid. Besides each key's range, refuses
+  /// combinations whose images need more than kMaxWorkingBytesPerFrame per frame.
+  std::vector<ConfigProblem> problems() const;
+  /// problems() as text, one "key: value 'x' is not allowed; expected ..." each.
   std::vector<std::string> validate() const;
+  /// This configuration repaired key by key: every key a broken rule names is reset to `fallback`'s value,
+  /// rule after rule (a reset can resolve, or expose, a rule across two keys); keys in `fixed` are never
+  /// reset. `repairs` receives what was done, problem by problem. The result is valid when its problems()
+  /// is empty, which it may not be when a `fixed` key breaks a rule or `fallback` is itself invalid.
+  Config sanitized(const Config& fallback, std::vector<ConfigRepair>& repairs,
+                   const std::vector<std::string>& fixed = {}) const;
   /// Bytes of the images one frame is turned into before description (workingBytesPerFrame = cells x
   /// patch_size^2 x kWorkingBytesPerPatchPixel; the 8-bit colour downsample, its grey and float copies, the
   /// float patches cut from it). 64 KiB for the defaults.
@@ -154,6 +182,27 @@ struct Config
   /// camera_type and description_type as enums. Throw Error for a word validate() refuses.
   CameraType camera() const;
   DescriptionType description() const;
+};
+
+/// A Config that passed validation, made once where a configuration enters (OnlineDetector, a tool, a
+/// nodelet): the modules built from one (FrameDescriber, LoopDetector) trust it and do not validate again.
+class ValidConfig
+{
+public:
+  /// Throws Error with every problem when `config` is invalid.
+  explicit ValidConfig(Config config);
+
+  const Config& operator*() const
+  {
+    return config_;
+  }
+  const Config* operator->() const
+  {
+    return &config_;
+  }
+
+private:
+  Config config_;
 };
 
 /// The candidate with the smallest edit distance to `name` (for "did you mean" messages); "" when empty.

@@ -82,11 +82,52 @@ DescriptionType Config::description() const
               oneOf(wordsOf(kDescriptionWords)));
 }
 
+std::string ConfigProblem::message() const
+{
+  std::string joined;
+  for (const auto& key : keys)
+    joined += (joined.empty() ? "" : "/") + key;
+  return joined + ": value '" + value + "' is not allowed; expected " + expected;
+}
+
 std::vector<std::string> Config::validate() const
 {
-  std::vector<std::string> errors;
-  auto bad = [&errors](const std::string& key, const std::string& value, const std::string& expected)
-  { errors.push_back(key + ": value '" + value + "' is not allowed; expected " + expected); };
+  std::vector<std::string> messages;
+  for (const auto& problem : problems())
+    messages.push_back(problem.message());
+  return messages;
+}
+
+Config Config::sanitized(const Config& fallback, std::vector<ConfigRepair>& repairs,
+                         const std::vector<std::string>& fixed) const
+{
+  Config config = *this;
+  // One round per key at most: each round resets at least one more key, or nothing is left to reset.
+  for (size_t round = 0; round < keys().size(); ++round)
+  {
+    const auto found = config.problems();
+    if (found.empty())
+      break;
+    for (const auto& problem : found)
+    {
+      ConfigRepair repair{problem, {}};
+      for (const auto& key : problem.keys)
+        if (std::find(fixed.begin(), fixed.end(), key) == fixed.end())
+        {
+          config.set(key, fallback.get(key));
+          repair.reset_keys.push_back(key);
+        }
+      repairs.push_back(std::move(repair));
+    }
+  }
+  return config;
+}
+
+std::vector<ConfigProblem> Config::problems() const
+{
+  std::vector<ConfigProblem> errors;
+  auto bad = [&errors](std::vector<std::string> keys, const std::string& value, const std::string& expected)
+  { errors.push_back(ConfigProblem{std::move(keys), value, expected}); };
 
   // Ranges from the key table (the same figures cfg/Detector.cfg carries, tested).
   for (const auto& k : table())
@@ -100,12 +141,12 @@ std::vector<std::string> Config::validate() const
     if (above_min && below_max)  // false for NaN too
       continue;
     if (k.key.type == "int")
-      bad(k.key.name, text,
+      bad({k.key.name}, text,
           "an integer in [" + std::to_string(int64_t(k.key.min)) + ", " + std::to_string(int64_t(k.key.max)) + "]");
     else if (k.key.name == "threshold")
-      bad(k.key.name, text, "-1 (off) or a number in [0, 1]");
+      bad({k.key.name}, text, "-1 (off) or a number in [0, 1]");
     else
-      bad(k.key.name, text,
+      bad({k.key.name}, text,
           std::string("a number in ") + (k.key.min_exclusive ? "(" : "[") + formatDouble(k.key.min) + ", " +
               formatDouble(k.key.max) + (k.key.max_exclusive ? ")" : "]"));
   }
@@ -113,18 +154,21 @@ std::vector<std::string> Config::validate() const
   // Rules beyond a range.
   const CameraType* camera_parsed = parseWord(kCameraWords, camera_type);
   if (!camera_parsed)
-    bad("camera_type", camera_type, oneOf(wordsOf(kCameraWords)));
+    bad({"camera_type"}, camera_type, oneOf(wordsOf(kCameraWords)));
   const DescriptionType* description_parsed = parseWord(kDescriptionWords, description_type);
   if (!description_parsed)
-    bad("description_type", description_type, oneOf(wordsOf(kDescriptionWords)));
+    bad({"description_type"}, description_type, oneOf(wordsOf(kDescriptionWords)));
   else if (*description_parsed == DescriptionType::Global && (grid_x != 1 || grid_y != 1))
-    bad("grid_x/grid_y", std::to_string(grid_x) + "x" + std::to_string(grid_y),
+    bad({"grid_x", "grid_y"}, std::to_string(grid_x) + "x" + std::to_string(grid_y),
         "1x1 with description_type global (set description_type: grid to use a grid)");
   const uint64_t working_bytes = workingBytesPerFrame();
   if (working_bytes > kMaxWorkingBytesPerFrame)
   {
     const bool panoramic = camera_parsed && *camera_parsed == CameraType::Panoramic;
-    bad("patch_size/grid_x/grid_y" + std::string(panoramic ? "/panoramas" : ""),
+    std::vector<std::string> keys_of_rule = {"patch_size", "grid_x", "grid_y"};
+    if (panoramic)
+      keys_of_rule.push_back("panoramas");
+    bad(keys_of_rule,
         std::to_string(patch_size) + " px, " + std::to_string(grid_x) + "x" + std::to_string(grid_y) + " cells" +
             (panoramic ? ", " + std::to_string(panoramas) + " panoramas" : ""),
         "at most " + std::to_string(kMaxWorkingBytesPerFrame) + " bytes of images per frame; this asks for " +
@@ -132,31 +176,31 @@ std::vector<std::string> Config::validate() const
             " bytes per patch pixel)");
   }
   if (patch_normalization > patch_size && patch_size >= 8)
-    bad("patch_normalization", std::to_string(patch_normalization),
+    bad({"patch_normalization"}, std::to_string(patch_normalization),
         "an integer in [0, " + std::to_string(patch_size) + "] (at most patch_size)");
   const DescriptorInfo* descriptor_row = findDescriptor(descriptor);
   if (!descriptor_row)
-    bad("descriptor", descriptor, oneOf(descriptorNames()));
+    bad({"descriptor"}, descriptor, oneOf(descriptorNames()));
   else if (descriptor_row->needs_disparity && !(camera_parsed && *camera_parsed == CameraType::Stereo))
-    bad("descriptor", descriptor,
+    bad({"descriptor"}, descriptor,
         "a mono descriptor (" + descriptor + " describes disparity and needs camera_type stereo)");
   if (min_sequence_length > sequence_length && sequence_length >= 1)
-    bad("min_sequence_length", std::to_string(min_sequence_length),
+    bad({"min_sequence_length"}, std::to_string(min_sequence_length),
         "an integer in [0, " + std::to_string(sequence_length) + "] (at most sequence_length)");
   if (threshold > -1.0 && threshold < 0.0)
-    bad("threshold", formatDouble(threshold), "-1 (off) or a number in [0, 1]");
+    bad({"threshold"}, formatDouble(threshold), "-1 (off) or a number in [0, 1]");
   // In 64 bits: sequence_length and exclusion_window may themselves be out of range (up to INT_MAX) here.
   const int64_t history_floor = 2 * (int64_t(sequence_length) + int64_t(exclusion_window));
   if (max_history > 0 && max_history <= history_floor)
-    bad("max_history", std::to_string(max_history),
+    bad({"max_history"}, std::to_string(max_history),
         "0 (unbounded) or more than 2 * (sequence_length + exclusion_window) = " + std::to_string(history_floor));
   if (stereo_block_size % 2 == 0)
-    bad("stereo_block_size", std::to_string(stereo_block_size), "an odd integer in [1, 31]");
+    bad({"stereo_block_size"}, std::to_string(stereo_block_size), "an odd integer in [1, 31]");
   if (display_normalization != "max" && display_normalization != "minmax")
-    bad("display_normalization", display_normalization, "max | minmax");
+    bad({"display_normalization"}, display_normalization, "max | minmax");
   // Both keys named, so a ROS parameter reader falls back on both (either one alone could still break it).
   if (!(verify_stereo_min_disparity_px < verify_stereo_max_disparity_px))
-    bad("verify_stereo_min_disparity_px/verify_stereo_max_disparity_px",
+    bad({"verify_stereo_min_disparity_px", "verify_stereo_max_disparity_px"},
         formatDouble(verify_stereo_min_disparity_px) + " / " + formatDouble(verify_stereo_max_disparity_px),
         "the smallest disparity below the largest");
   return errors;
@@ -186,6 +230,11 @@ void Config::validateOrThrow() const
   for (size_t i = 0; i < errors.size(); ++i)
     message += (i ? "; " : "") + errors[i];
   throw Error(message);
+}
+
+ValidConfig::ValidConfig(Config config) : config_(std::move(config))
+{
+  config_.validateOrThrow();
 }
 
 Config Config::paper()

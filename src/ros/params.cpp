@@ -128,10 +128,6 @@ std::string shown(const std::string& value)
   return out.str();
 }
 
-std::string keyOfError(const std::string& error)
-{
-  return error.substr(0, error.find(':'));
-}
 }  // namespace
 
 openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openable::Config& defaults,
@@ -181,47 +177,18 @@ openable::Config loadCoreConfig(const ros::NodeHandle& private_nh, const openabl
 bool fallBackKeyByKey(openable::Config& config, const openable::Config& fallback, const std::string& verb,
                       const std::string& everything, std::vector<std::string>& messages)
 {
-  // Validation errors name their key ("key: value ..."): that key falls back, and validation runs again,
-  // since a fallback can resolve (or expose) a rule that involves two keys.
-  for (size_t round = 0; round < openable::Config::keys().size(); ++round)
+  // The core repairs (Config::sanitized, rule by rule); here each repair is only worded. camera_type is the
+  // nodelet's own and never falls back.
+  std::vector<openable::ConfigRepair> repairs;
+  config = config.sanitized(fallback, repairs, {"camera_type"});
+  for (const auto& repair : repairs)
   {
-    const auto errors = config.validate();
-    if (errors.empty())
-    {
-      return true;
-    }
-    for (const auto& error : errors)
-    {
-      std::string keys = keyOfError(error);
-      std::string fallbacks;
-      size_t start = 0;
-      while (start <= keys.size())
-      {
-        const size_t slash = keys.find('/', start);
-        const std::string key = keys.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
-        if (key == "camera_type")
-        {
-          break;
-        }
-        try
-        {
-          config.set(key, fallback.get(key));
-          fallbacks += (fallbacks.empty() ? "" : ", ") + key + " = " + shown(fallback.get(key));
-        }
-        catch (const openable::Error&)
-        {
-          // Not a key (a rule that names something else): the caller's whole-config fallback handles it.
-        }
-        if (slash == std::string::npos)
-        {
-          break;
-        }
-        start = slash + 1;
-      }
-      messages.push_back("~" + error + "; " + verb + " " + (fallbacks.empty() ? everything : fallbacks));
-    }
+    std::string fallbacks;
+    for (const auto& key : repair.reset_keys)
+      fallbacks += (fallbacks.empty() ? "" : ", ") + key + " = " + shown(fallback.get(key));
+    messages.push_back("~" + repair.problem.message() + "; " + verb + " " + (fallbacks.empty() ? everything : fallbacks));
   }
-  return config.validate().empty();
+  return config.problems().empty();
 }
 
 double readDouble(const ros::NodeHandle& private_nh, const std::string& name, double fallback, double min, double max,

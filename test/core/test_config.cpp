@@ -149,6 +149,82 @@ TEST(Config, ValidateNamesKeyValueAndAllowedValues)
   EXPECT_FALSE(threshold_negative.validate().empty());
 }
 
+// Problems are values: the keys a rule involves (both keys of a rule across two), the value, what was
+// expected; validate() is their text, so nothing downstream parses key names out of a message.
+TEST(ConfigProblems, NameEveryKeyOfTheRuleAsValues)
+{
+  Config c;
+  c.description_type = "global";
+  c.grid_x = 3;
+  c.verify_stereo_min_disparity_px = 50.0;
+  c.verify_stereo_max_disparity_px = 10.0;
+  c.sequence_length = 0;
+  const auto problems = c.problems();
+  const auto has = [&](std::vector<std::string> keys)
+  { return std::any_of(problems.begin(), problems.end(), [&](const ConfigProblem& p) { return p.keys == keys; }); };
+  EXPECT_TRUE(has({"grid_x", "grid_y"}));
+  EXPECT_TRUE(has({"verify_stereo_min_disparity_px", "verify_stereo_max_disparity_px"}));
+  EXPECT_TRUE(has({"sequence_length"}));
+  ASSERT_EQ(c.validate().size(), problems.size());
+  for (size_t i = 0; i < problems.size(); ++i)
+    EXPECT_EQ(c.validate()[i], problems[i].message());
+  EXPECT_EQ(ConfigProblem({{"a", "b"}, "1 / 2", "something"}).message(),
+            "a/b: value '1 / 2' is not allowed; expected something");
+  EXPECT_TRUE(Config().problems().empty());
+}
+
+// sanitized() resets exactly the keys broken rules name, rule after rule, leaves the rest and the fixed keys
+// alone, and says what it did.
+TEST(ConfigProblems, SanitizedResetsTheKeysOfEachBrokenRule)
+{
+  Config fallback;
+  fallback.threshold = 0.05;
+  Config requested = fallback;
+  requested.threshold = 5.0;           // out of range: falls back
+  requested.sequence_length = 4;       // valid: kept
+  requested.min_sequence_length = 9;   // above sequence_length: falls back
+  std::vector<ConfigRepair> repairs;
+  const Config repaired = requested.sanitized(fallback, repairs);
+  EXPECT_TRUE(repaired.problems().empty());
+  EXPECT_EQ(repaired.threshold, 0.05);
+  EXPECT_EQ(repaired.sequence_length, 4);
+  EXPECT_EQ(repaired.min_sequence_length, fallback.min_sequence_length);
+  ASSERT_EQ(repairs.size(), 2u);
+  EXPECT_EQ(repairs[0].reset_keys, std::vector<std::string>{"threshold"});
+  EXPECT_EQ(repairs[1].reset_keys, std::vector<std::string>{"min_sequence_length"});
+
+  // A fixed key is never reset: the problem is reported, the result stays invalid.
+  Config wrong_camera;
+  wrong_camera.camera_type = "fisheye";
+  repairs.clear();
+  const Config kept = wrong_camera.sanitized(fallback, repairs, {"camera_type"});
+  EXPECT_EQ(kept.camera_type, "fisheye");
+  EXPECT_FALSE(kept.problems().empty());
+  ASSERT_FALSE(repairs.empty());
+  EXPECT_TRUE(repairs[0].reset_keys.empty());
+}
+
+// ValidConfig is the one validation of a start: it refuses an invalid configuration with every problem, and
+// what is built from it (OnlineDetector, LoopDetector, FrameDescriber) does not validate again.
+TEST(ConfigProblems, ValidConfigRefusesWhatValidateRefuses)
+{
+  Config bad;
+  bad.sequence_length = 0;
+  bad.descriptor = "AKAZE";
+  try
+  {
+    ValidConfig valid(bad);
+    FAIL() << "an invalid configuration was accepted";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("sequence_length"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("descriptor"), std::string::npos) << e.what();
+  }
+  const ValidConfig valid{Config()};
+  EXPECT_EQ(valid->descriptor, Config().descriptor);
+}
+
 TEST(Config, AlphaFromPeakWavelengthsReproducesKittiValue)
 {
   // Paper: PointGrey Flea2 with peaks at 610, 535 and 470 nm gives alpha = 0.47.

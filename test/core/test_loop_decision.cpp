@@ -192,7 +192,7 @@ TEST(LoopDecision, APublishedRunContinuesThroughLessUniqueFramesOnItsLineOnly)
   EXPECT_EQ(decision.decide(candidate(64, 0.05f, 100, 0.25f)), FrameStatus::NotUnique);
   // A distance gate still holds inside a run.
   c.threshold = 0.3;
-  decision.setConfig(c);
+  decision.setOptions(DecisionOptions::from(c));
   for (uint64_t m = 50; m < 53; ++m)
     decision.decide(candidate(m, 0.2f));
   EXPECT_EQ(decision.decide(candidate(53, 0.05f, 100, 0.205f)), FrameStatus::Published);

@@ -14,7 +14,7 @@
 namespace openable
 {
 /// The layout of a frame's descriptor under `config`, from the descriptor registry and the cell grid alone
-/// (no extractor is built). Throws Error when the configuration is invalid or the layout unsupported.
+/// (no extractor is built). Throws Error for an unknown descriptor or camera, or an unsupported layout.
 DescriptorLayout descriptorLayout(const Config& config);
 
 /// The extractor named by config.descriptor, for its patch_size. Throws Error for an unknown name (listing
@@ -28,6 +28,7 @@ class FrameDescriber
 public:
   /// Validates the config and builds the extractor. Throws Error.
   explicit FrameDescriber(const Config& config);
+  explicit FrameDescriber(const ValidConfig& config);
 
   const DescriptorLayout& layout() const
   {

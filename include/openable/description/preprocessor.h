@@ -18,6 +18,26 @@ cv::Mat illuminationInvariant(const cv::Mat& bgr, double alpha);
 /// described. Flat blocks become 0. block <= 0 returns the image unchanged.
 cv::Mat normalizeBlocks(const cv::Mat& image, int block);
 
+/// What Preprocessor reads of a Config (the keys of the same names; camera_type and description_type parsed).
+struct PreprocessOptions
+{
+  CameraType camera;
+  DescriptionType description;
+  int grid_x;
+  int grid_y;
+  int panoramas;
+  int patch_size;
+  int patch_normalization;
+  bool illumination_invariance;
+  double alpha;
+
+  /// Throws Error for a camera_type or description_type that is not one of the words.
+  static PreprocessOptions from(const Config& config);
+  /// Cells across one image (grid columns, times the sub-panoramas) and down it.
+  int cellsAcross() const;
+  int cellsDown() const;
+};
+
 /// Turns a camera image into the patches to describe.
 ///
 /// Input: 8-bit grey, BGR or BGRA, any size. The image is first reduced to one channel (grey, or Eq. 6
@@ -26,13 +46,11 @@ cv::Mat normalizeBlocks(const cv::Mat& image, int block);
 /// patch; grid description splits the image into grid_x x grid_y cells; panoramic images are split into
 /// `panoramas` vertical sub-panoramas (each of them split into the grid). Cells are returned row by row,
 /// sub-panorama by sub-panorama (sub-panorama-major). Patches are CV_32F.
-/// Cells across (grid columns, times the sub-panoramas) and down one image under `config`.
-int cellsAcross(const Config& config);
-int cellsDown(const Config& config);
-
 class Preprocessor
 {
 public:
+  explicit Preprocessor(const PreprocessOptions& options);
+  /// Shorthand: Preprocessor(PreprocessOptions::from(config)).
   explicit Preprocessor(const Config& config);
 
   /// Cells across and down the whole image (panoramas * grid_x, grid_y).
@@ -62,7 +80,7 @@ public:
 
 private:
   std::vector<Patch> split(const cv::Mat& intensity, const cv::Mat& disparity, int across) const;
-  Config config_;
+  PreprocessOptions options_;
 };
 
 }  // namespace openable

@@ -45,9 +45,25 @@ float matchUniqueness(float best, std::optional<float> second_best);
 /// from, pass every gate that is set, and agree with the consistent_frames - 1 frames before it: their
 /// best matches advance together, one place per frame within consistency_tolerance (a revisit at about
 /// the same speed, as sequence matching assumes anyway), step by step and over the whole run.
+/// What LoopDecision reads of a Config (the keys of the same names): the gates and the consistency rule.
+struct DecisionOptions
+{
+  double threshold;             ///< -1: off
+  double min_uniqueness;        ///< 0: off
+  double continue_uniqueness;   ///< a published run goes on through frames at least this unique
+  int min_candidates;           ///< full-sequence places a frame must have to choose from
+  int consistent_frames;        ///< frames that must agree before a loop is published
+  int consistency_tolerance;    ///< places a match may be off the run's line
+  int max_pace;                 ///< a run advances from 1 / max_pace to max_pace places per frame
+
+  static DecisionOptions from(const Config& config);
+};
+
 class LoopDecision
 {
 public:
+  explicit LoopDecision(const DecisionOptions& options);
+  /// Shorthand: LoopDecision(DecisionOptions::from(config)).
   explicit LoopDecision(const Config& config);
 
   /// Decides on one matched frame. Returns Published when every rule passes; verification comes after.
@@ -58,7 +74,7 @@ public:
 
   /// Takes new values of the decision keys (threshold, min_uniqueness, min_candidates, consistent_frames,
   /// consistency_tolerance); the consistency run restarts.
-  void setConfig(const Config& config);
+  void setOptions(const DecisionOptions& options);
   /// Forgets the consistency run (a new stream, or a gap in it).
   void reset();
 
@@ -69,7 +85,7 @@ private:
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
 
-  Config config_;
+  DecisionOptions options_;
   int run_ = 0;                   ///< consecutive frames (ending at the previous one) that passed and agree
   bool published_ = false;        ///< the previous frame was published (its run is a loop)
   double unique_distance_ = 0.0;  ///< distance of the last frame that passed the gates itself

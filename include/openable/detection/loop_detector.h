@@ -38,6 +38,11 @@ public:
   /// layout differs from the configuration's, or the new session's name is already in the map.
   LoopDetector(const Config& config, SessionMap map, MapMode mode,
                SessionInfo session = SessionInfo{"session 0", "", 0.0});
+  /// The same, from a configuration validated already (OnlineDetector's): not validated again.
+  explicit LoopDetector(const ValidConfig& config, SessionInfo session = SessionInfo{"session 0", "", 0.0});
+  LoopDetector(const ValidConfig& config, PlaceDatabase reference_map);
+  LoopDetector(const ValidConfig& config, SessionMap map, MapMode mode,
+               SessionInfo session = SessionInfo{"session 0", "", 0.0});
 
   bool localisationMode() const
   {

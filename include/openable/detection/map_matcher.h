@@ -53,9 +53,28 @@ bool onlyExcludedPast(const Detection& detection, size_t other_frames);
 /// candidates: the partial chains at the start of a stream compare a few frames only and were the main
 /// source of false loops (measured, doc/results.md); localisation accepts min_sequence_length terms,
 /// because there every query has a true match.
+/// What MapMatcher reads of a Config (the keys of the same names): sequences, paces, the exclusion, top-k.
+struct MatchOptions
+{
+  int sequence_length;
+  int min_sequence_length;
+  bool bidirectional;
+  int max_pace;               ///< 1: the paper's sequences (SequenceMatcher); more: PaceMatcher
+  double pace_penalty;
+  int pace_tolerance;
+  int exclusion_window;       ///< own-session frames too recent to be candidates
+  double exclusion_seconds;   ///< the same in seconds of stamp
+  int top_k;
+  int uniqueness_window;
+
+  static MatchOptions from(const Config& config);
+};
+
 class MapMatcher
 {
 public:
+  MapMatcher(const MatchOptions& options, const DescriptorLayout& layout, bool partial_sequences);
+  /// Shorthand: MapMatcher(MatchOptions::from(config), layout, partial_sequences).
   MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences);
 
   /// Matches the next query frame. own_session is the session the stream stores its frames in (-1: none).
@@ -67,13 +86,13 @@ public:
   void lastRow(const SessionMap& map, std::vector<float>& out) const;
 
   /// New matching keys (sequence_length and bidirectional restart every sequence). The caller validates.
-  void setConfig(const Config& config);
+  void setOptions(const MatchOptions& options);
   /// Forgets the query stream.
   void reset();
 
   int sequenceLength() const
   {
-    return config_.sequence_length;
+    return options_.sequence_length;
   }
 
 private:
@@ -84,7 +103,7 @@ private:
   Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;
   int minTerms() const;
 
-  Config config_;
+  MatchOptions options_;
   bool partial_sequences_;
   FrameMetric metric_;
   /// A session's matcher: sequences at any pace (PaceMatcher), or at the first pass's pace (max_pace 1).

@@ -99,6 +99,11 @@ public:
   /// session of that name.
   OnlineDetector(const Config& config, SessionMap map, MapMode mode, SessionInfo session,
                  const OnlineOptions& options = OnlineOptions());
+  /// The same three, from a configuration validated already: the one validation of a start.
+  explicit OnlineDetector(const ValidConfig& config, const OnlineOptions& options = OnlineOptions());
+  OnlineDetector(const ValidConfig& config, PlaceDatabase reference_map, const OnlineOptions& options = OnlineOptions());
+  OnlineDetector(const ValidConfig& config, SessionMap map, MapMode mode, SessionInfo session,
+                 const OnlineOptions& options = OnlineOptions());
 
   /// Describes, stores, matches and decides. Bad images throw Error / cv::Exception before anything is
   /// stored, so a caller can report and carry on; what the input contract refuses (input_contract.h: a

@@ -11,13 +11,13 @@ namespace openable
 {
 DescriptorLayout descriptorLayout(const Config& config)
 {
-  config.validateOrThrow();
   const DescriptorInfo& row = descriptorInfo(config.descriptor);
   DescriptorLayout layout;
   layout.binary = row.binary();
   layout.cell_length = row.length;
   layout.cell_words = layout.binary ? wordsForBits(layout.cell_length) : (layout.cell_length + 1) / 2;
-  layout.cells = cellsAcross(config) * cellsDown(config);
+  const PreprocessOptions cells = PreprocessOptions::from(config);
+  layout.cells = cells.cellsAcross() * cells.cellsDown();
   layout.blocks = config.camera() == CameraType::Panoramic ? config.panoramas : 1;
   const std::string problem = layout.check();
   if (!problem.empty())
@@ -37,12 +37,17 @@ std::unique_ptr<DescriptorExtractor> createDescriptorExtractor(const Config& con
   return row.create(config.patch_size);
 }
 
-FrameDescriber::FrameDescriber(const Config& config)
-  : config_(config), preprocessor_(config), layout_(descriptorLayout(config)), extractor_(createDescriptorExtractor(config))
+FrameDescriber::FrameDescriber(const Config& config) : FrameDescriber(ValidConfig(config)) {}
+
+FrameDescriber::FrameDescriber(const ValidConfig& config)
+  : config_(*config),
+    preprocessor_(*config),
+    layout_(descriptorLayout(*config)),
+    extractor_(createDescriptorExtractor(*config))
 {
   // The registry's row and the extractor it builds must agree (test_descriptors checks every row).
   if (extractor_->isBinary() != layout_.binary || extractor_->length() != layout_.cell_length)
-    throw Error("descriptor " + config.descriptor + ": its registry row does not match its extractor");
+    throw Error("descriptor " + config->descriptor + ": its registry row does not match its extractor");
 }
 
 FrameDescriptor FrameDescriber::describe(const std::vector<Patch>& patches) const

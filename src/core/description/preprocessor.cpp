@@ -77,27 +77,44 @@ cv::Mat illuminationInvariant(const cv::Mat& bgr, double alpha)
   return out;
 }
 
-Preprocessor::Preprocessor(const Config& config) : config_(config) {}
-
-int cellsAcross(const Config& config)
+PreprocessOptions PreprocessOptions::from(const Config& config)
 {
-  const int grid = config.description() == DescriptionType::Grid ? config.grid_x : 1;
-  return config.camera() == CameraType::Panoramic ? config.panoramas * grid : grid;
+  PreprocessOptions o;
+  o.camera = config.camera();
+  o.description = config.description();
+  o.grid_x = config.grid_x;
+  o.grid_y = config.grid_y;
+  o.panoramas = config.panoramas;
+  o.patch_size = config.patch_size;
+  o.patch_normalization = config.patch_normalization;
+  o.illumination_invariance = config.illumination_invariance;
+  o.alpha = config.alpha;
+  return o;
 }
 
-int cellsDown(const Config& config)
+int PreprocessOptions::cellsAcross() const
 {
-  return config.description() == DescriptionType::Grid ? config.grid_y : 1;
+  const int grid = description == DescriptionType::Grid ? grid_x : 1;
+  return camera == CameraType::Panoramic ? panoramas * grid : grid;
 }
+
+int PreprocessOptions::cellsDown() const
+{
+  return description == DescriptionType::Grid ? grid_y : 1;
+}
+
+Preprocessor::Preprocessor(const PreprocessOptions& options) : options_(options) {}
+
+Preprocessor::Preprocessor(const Config& config) : Preprocessor(PreprocessOptions::from(config)) {}
 
 int Preprocessor::cellsAcross() const
 {
-  return openable::cellsAcross(config_);
+  return options_.cellsAcross();
 }
 
 int Preprocessor::cellsDown() const
 {
-  return openable::cellsDown(config_);
+  return options_.cellsDown();
 }
 
 void Preprocessor::checkInput(const cv::Mat& image, const char* what) const
@@ -107,7 +124,7 @@ void Preprocessor::checkInput(const cv::Mat& image, const char* what) const
   if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3 && image.channels() != 4))
     throw Error(std::string(what) + " is " + describeMat(image) +
                 "; expected 8-bit grey (mono8), BGR (bgr8) or BGRA (bgra8)");
-  if (config_.illumination_invariance && image.channels() == 1)
+  if (options_.illumination_invariance && image.channels() == 1)
     throw Error(std::string(what) +
                 " is grey but illumination_invariance is on; Eq. 6 needs colour (BGR) input: send colour images or "
                 "set illumination_invariance: false");
@@ -116,7 +133,7 @@ void Preprocessor::checkInput(const cv::Mat& image, const char* what) const
 cv::Mat Preprocessor::intensity(const cv::Mat& image) const
 {
   checkInput(image);
-  return toOneChannel(image, config_.illumination_invariance, config_.alpha);
+  return toOneChannel(image, options_.illumination_invariance, options_.alpha);
 }
 
 std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
@@ -131,26 +148,26 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
   // decimation of the 8-bit image first, one pass over its bytes, converting to grey as it goes; then the
   // per-pixel work (logarithms) on the few pixels left, and the small area step to the patch size on one
   // channel.
-  const int p = config_.patch_size;
+  const int p = options_.patch_size;
   const cv::Size target(across * p, down * p);
-  cv::Mat small = config_.illumination_invariance
-                      ? illuminationInvariant(decimateTowards(image, target), config_.alpha)
-                      : toOneChannel(decimateGreyTowards(image, target), false, config_.alpha);
+  cv::Mat small = options_.illumination_invariance
+                      ? illuminationInvariant(decimateTowards(image, target), options_.alpha)
+                      : toOneChannel(decimateGreyTowards(image, target), false, options_.alpha);
   if (small.size() != target)
     small = areaResize(small, target);
-  return split(normalizeBlocks(small, config_.patch_normalization), cv::Mat(), across);
+  return split(normalizeBlocks(small, options_.patch_normalization), cv::Mat(), across);
 }
 
 std::vector<Patch> Preprocessor::patchesFromCameras(const std::vector<cv::Mat>& images) const
 {
-  if (config_.camera() != CameraType::Panoramic)
+  if (options_.camera != CameraType::Panoramic)
     throw Error("a multi-camera frame needs camera_type panoramic");
-  if (static_cast<int>(images.size()) != config_.panoramas)
+  if (static_cast<int>(images.size()) != options_.panoramas)
     throw Error("a multi-camera frame has " + std::to_string(images.size()) + " images; expected panoramas = " +
-                std::to_string(config_.panoramas) + " (one per camera, in ring order)");
+                std::to_string(options_.panoramas) + " (one per camera, in ring order)");
   std::vector<Patch> out;
-  Config single = config_;
-  single.camera_type = "mono";
+  PreprocessOptions single = options_;
+  single.camera = CameraType::Mono;
   const Preprocessor camera(single);
   for (size_t i = 0; i < images.size(); ++i)
   {
@@ -172,11 +189,11 @@ std::vector<Patch> Preprocessor::patchesWithDisparity(const cv::Mat& left, const
     throw Error("disparity of " + describeMat(disparity) + " does not match the left image " + describeMat(left));
   const int across = cellsAcross();
   const int down = cellsDown();
-  const int p = config_.patch_size;
+  const int p = options_.patch_size;
   const cv::Size target(across * p, down * p);
 
   const cv::Mat small = areaDownsample(left, target);
-  const cv::Mat intensity = toOneChannel(small, config_.illumination_invariance, config_.alpha);
+  const cv::Mat intensity = toOneChannel(small, options_.illumination_invariance, options_.alpha);
 
   // Average only valid disparities: invalid ones (NaN, <= 0) must not leak in as huge or zero values.
   cv::Mat valid = (disparity > 0.0f);  // NaN compares false
@@ -212,9 +229,9 @@ std::vector<Patch> Preprocessor::patchesWithDisparity(const cv::Mat& left, const
 
 std::vector<Patch> Preprocessor::split(const cv::Mat& intensity, const cv::Mat& disparity, int across) const
 {
-  const int p = config_.patch_size;
+  const int p = options_.patch_size;
   const int down = cellsDown();
-  const int grid_x = config_.description() == DescriptionType::Grid ? config_.grid_x : 1;
+  const int grid_x = options_.description == DescriptionType::Grid ? options_.grid_x : 1;
   const int blocks = across / grid_x;
   std::vector<Patch> out;
   out.reserve(across * down);

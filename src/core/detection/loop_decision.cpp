@@ -43,11 +43,26 @@ float matchUniqueness(float best, std::optional<float> second_best)
   return *second_best > 0.0f ? 1.0f - best / *second_best : 0.0f;
 }
 
-LoopDecision::LoopDecision(const Config& config) : config_(config) {}
-
-void LoopDecision::setConfig(const Config& config)
+DecisionOptions DecisionOptions::from(const Config& config)
 {
-  config_ = config;
+  DecisionOptions o;
+  o.threshold = config.threshold;
+  o.min_uniqueness = config.min_uniqueness;
+  o.continue_uniqueness = config.continue_uniqueness;
+  o.min_candidates = config.min_candidates;
+  o.consistent_frames = config.consistent_frames;
+  o.consistency_tolerance = config.consistency_tolerance;
+  o.max_pace = config.max_pace;
+  return o;
+}
+
+LoopDecision::LoopDecision(const DecisionOptions& options) : options_(options) {}
+
+LoopDecision::LoopDecision(const Config& config) : LoopDecision(DecisionOptions::from(config)) {}
+
+void LoopDecision::setOptions(const DecisionOptions& options)
+{
+  options_ = options;
   reset();
 }
 
@@ -61,21 +76,21 @@ void LoopDecision::reset()
 float LoopDecision::score(const Detection& detection) const
 {
   const bool meaningful =
-      detection.has_candidates && detection.candidates >= static_cast<size_t>(config_.min_candidates);
+      detection.has_candidates && detection.candidates >= static_cast<size_t>(options_.min_candidates);
   return meaningful ? detection.uniqueness : 0.0f;
 }
 
 bool LoopDecision::gatesPass(const Detection& detection, FrameStatus& why) const
 {
-  if (config_.threshold >= 0.0 && detection.best.distance > config_.threshold)
+  if (options_.threshold >= 0.0 && detection.best.distance > options_.threshold)
   {
     why = FrameStatus::AboveThreshold;
     return false;
   }
   // The acceptance gate, here only. With neither gate set nothing is a loop: the best match of a frame always
   // exists, a loop does not.
-  const bool gated = config_.threshold >= 0.0 || config_.min_uniqueness > 0.0;
-  if (!gated || detection.uniqueness < config_.min_uniqueness)
+  const bool gated = options_.threshold >= 0.0 || options_.min_uniqueness > 0.0;
+  if (!gated || detection.uniqueness < options_.min_uniqueness)
   {
     why = FrameStatus::NotUnique;
     return false;
@@ -93,8 +108,8 @@ bool LoopDecision::advancesWithRun(const Detection& detection) const
   // camera adds no frame), within consistency_tolerance: per step and over the whole run, so a match that
   // stays put (a "hub" place that every frame matches) never becomes consistent by small steps. At
   // max_pace 1 this is one place per frame.
-  const double pace = std::max(1, config_.max_pace);
-  const double tolerance = config_.consistency_tolerance;
+  const double pace = std::max(1, options_.max_pace);
+  const double tolerance = options_.consistency_tolerance;
   const auto advance = [&detection](uint64_t from)
   { return detection.best.direction * (static_cast<double>(detection.best.id) - static_cast<double>(from)); };
   const auto within = [&](double moved, double frames)
@@ -111,17 +126,17 @@ bool LoopDecision::recentFramesFollowOneLine() const
   // sequence creeping along a few look-alike places at the slowest pace is a hub, not a revisit (measured on
   // Gardens Point day_left, which has no loop: 12 such frames published without this).
   const size_t n = recent_.size();
-  if (config_.max_pace <= 1 || n < 3)
+  if (options_.max_pace <= 1 || n < 3)
     return true;
   const double first = static_cast<double>(recent_.front()), last = static_cast<double>(recent_.back());
   const double frames = static_cast<double>(n - 1);
   const double advanced = (last - first) * previous_direction_;
-  if (advanced < frames / config_.max_pace + 0.5 || advanced > frames * config_.max_pace + config_.consistency_tolerance)
+  if (advanced < frames / options_.max_pace + 0.5 || advanced > frames * options_.max_pace + options_.consistency_tolerance)
     return false;
   for (size_t k = 1; k + 1 < n; ++k)
   {
     const double expected = first + (last - first) * static_cast<double>(k) / frames;
-    if (std::fabs(static_cast<double>(recent_[k]) - expected) > config_.consistency_tolerance)
+    if (std::fabs(static_cast<double>(recent_[k]) - expected) > options_.consistency_tolerance)
       return false;
   }
   return true;
@@ -138,7 +153,7 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
   // that leaves the route (or a stream that jumps) keeps its old sequence a few frames, matching the end of
   // the route with a rising distance (measured: 0.288 after 0.265 in test_map_sessions' jump).
   constexpr double kContinueSlack = 1.05;
-  return why == FrameStatus::NotUnique && published_ && detection.uniqueness >= config_.continue_uniqueness &&
+  return why == FrameStatus::NotUnique && published_ && detection.uniqueness >= options_.continue_uniqueness &&
          detection.best.distance <= kContinueSlack * unique_distance_ && advancesWithRun(detection);
 }
 
@@ -147,7 +162,7 @@ FrameStatus LoopDecision::decide(const Detection& detection)
   FrameStatus status = FrameStatus::Published;
   if (!detection.has_candidates)
     status = detection.excluded ? FrameStatus::Excluded : FrameStatus::TooEarly;
-  else if (detection.candidates < static_cast<size_t>(config_.min_candidates))
+  else if (detection.candidates < static_cast<size_t>(options_.min_candidates))
     status = FrameStatus::TooEarly;
   else if (!gatesPass(detection, status) && !continuesPublishedRun(detection, status))
   {
@@ -165,12 +180,12 @@ FrameStatus LoopDecision::decide(const Detection& detection)
       recent_.clear();
     }
     recent_.push_back(detection.best.id);
-    while (recent_.size() > static_cast<size_t>(config_.consistent_frames))
+    while (recent_.size() > static_cast<size_t>(options_.consistent_frames))
       recent_.pop_front();
     previous_match_ = detection.best.id;
     previous_direction_ = detection.best.direction;
     previous_session_ = detection.best.session;
-    published_ = run_ >= config_.consistent_frames && recentFramesFollowOneLine();
+    published_ = run_ >= options_.consistent_frames && recentFramesFollowOneLine();
     return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
   }
   reset();

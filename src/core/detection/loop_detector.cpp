@@ -16,7 +16,6 @@ size_t capacityFor(const Config& config)
 /// for more frames is only memory.
 SessionMap checkedMap(const Config& config, SessionMap map, MapMode mode)
 {
-  config.validateOrThrow();
   if (map.layout() != descriptorLayout(config))
     throw Error(
         "the map's descriptors do not match this configuration (descriptor, patch_size, grid, panoramas or "
@@ -28,21 +27,36 @@ SessionMap checkedMap(const Config& config, SessionMap map, MapMode mode)
 }  // namespace
 
 LoopDetector::LoopDetector(const Config& config, SessionInfo session)
-  : LoopDetector(config, SessionMap(descriptorLayout(config), config.toYaml()), MapMode::Continue, std::move(session))
+  : LoopDetector(ValidConfig(config), std::move(session))
+{
+}
+
+LoopDetector::LoopDetector(const ValidConfig& config, SessionInfo session)
+  : LoopDetector(config, SessionMap(descriptorLayout(*config), config->toYaml()), MapMode::Continue, std::move(session))
 {
 }
 
 LoopDetector::LoopDetector(const Config& config, PlaceDatabase reference_map)
+  : LoopDetector(ValidConfig(config), std::move(reference_map))
+{
+}
+
+LoopDetector::LoopDetector(const ValidConfig& config, PlaceDatabase reference_map)
   : LoopDetector(config, SessionMap(std::move(reference_map), SessionInfo{"session 0", "", 0.0}), MapMode::Localise)
 {
 }
 
 LoopDetector::LoopDetector(const Config& config, SessionMap map, MapMode mode, SessionInfo session)
-  : config_(config),
-    map_(checkedMap(config, std::move(map), mode)),
-    own_session_(mode == MapMode::Continue ? static_cast<int>(map_.addSession(std::move(session), capacityFor(config)))
+  : LoopDetector(ValidConfig(config), std::move(map), mode, std::move(session))
+{
+}
+
+LoopDetector::LoopDetector(const ValidConfig& valid, SessionMap map, MapMode mode, SessionInfo session)
+  : config_(*valid),
+    map_(checkedMap(config_, std::move(map), mode)),
+    own_session_(mode == MapMode::Continue ? static_cast<int>(map_.addSession(std::move(session), capacityFor(config_)))
                                            : -1),
-    matcher_(config, map_.layout(), mode == MapMode::Localise)
+    matcher_(config_, map_.layout(), mode == MapMode::Localise)
 {
 }
 
@@ -79,7 +93,7 @@ void LoopDetector::updateMatching(const Config& config)
                 " while running: they change the stored descriptors or history; "
                 "restart the detector (the history is rebuilt from new frames)");
   }
-  matcher_.setConfig(config);
+  matcher_.setOptions(MatchOptions::from(config));
   config_ = config;
 }
 

@@ -14,40 +14,61 @@ bool onlyExcludedPast(const Detection& detection, size_t other_frames)
   return detection.top.empty() && detection.own_excluded && other_frames == 0;
 }
 
+MatchOptions MatchOptions::from(const Config& config)
+{
+  MatchOptions o;
+  o.sequence_length = config.sequence_length;
+  o.min_sequence_length = config.min_sequence_length;
+  o.bidirectional = config.bidirectional;
+  o.max_pace = config.max_pace;
+  o.pace_penalty = config.pace_penalty;
+  o.pace_tolerance = config.pace_tolerance;
+  o.exclusion_window = config.exclusion_window;
+  o.exclusion_seconds = config.exclusion_seconds;
+  o.top_k = config.top_k;
+  o.uniqueness_window = config.uniqueness_window;
+  return o;
+}
+
+MapMatcher::MapMatcher(const MatchOptions& options, const DescriptorLayout& layout, bool partial_sequences)
+  : options_(options), partial_sequences_(partial_sequences), metric_(layout)
+{
+}
+
 MapMatcher::MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences)
-  : config_(config), partial_sequences_(partial_sequences), metric_(layout)
+  : MapMatcher(MatchOptions::from(config), layout, partial_sequences)
 {
 }
 
 std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layout) const
 {
-  if (config_.max_pace <= 1)
-    return std::make_unique<SequenceMatcher>(layout, config_.sequence_length, config_.bidirectional);
+  if (options_.max_pace <= 1)
+    return std::make_unique<SequenceMatcher>(layout, options_.sequence_length, options_.bidirectional);
   PaceOptions pace;
-  pace.max_pace = config_.max_pace;
-  pace.penalty = static_cast<float>(config_.pace_penalty);
-  pace.tolerance = config_.pace_tolerance;
-  return std::make_unique<PaceMatcher>(layout, config_.sequence_length, config_.bidirectional, pace);
+  pace.max_pace = options_.max_pace;
+  pace.penalty = static_cast<float>(options_.pace_penalty);
+  pace.tolerance = options_.pace_tolerance;
+  return std::make_unique<PaceMatcher>(layout, options_.sequence_length, options_.bidirectional, pace);
 }
 
 int MapMatcher::minTerms() const
 {
-  if (!partial_sequences_ || config_.min_sequence_length == 0)
-    return config_.sequence_length;
-  return config_.min_sequence_length;
+  if (!partial_sequences_ || options_.min_sequence_length == 0)
+    return options_.sequence_length;
+  return options_.min_sequence_length;
 }
 
 size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const
 {
   if (!own)
     return frames.size();
-  const size_t excluded = static_cast<size_t>(config_.exclusion_window);
+  const size_t excluded = static_cast<size_t>(options_.exclusion_window);
   size_t columns = frames.size() > excluded ? frames.size() - excluded : 0;
-  if (config_.exclusion_seconds > 0.0 && stamp > 0.0)
+  if (options_.exclusion_seconds > 0.0 && stamp > 0.0)
   {
     // Stamps grow along a session (the caller refuses time jumps): the first position stamped too
     // recently, by binary search.
-    const double newest_allowed = stamp - config_.exclusion_seconds;
+    const double newest_allowed = stamp - options_.exclusion_seconds;
     size_t low = 0, high = columns;
     while (low < high)
     {
@@ -97,8 +118,8 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   // matching: no pass over a row of N floats), then the best of them all. A uniqueness window never
   // reaches into another session, so this picks exactly what one scan of all sessions' rows would.
   Detection detection;
-  const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
-  const size_t window = static_cast<size_t>(std::max(0, config_.uniqueness_window));
+  const size_t wanted = static_cast<size_t>(std::max(options_.top_k, 2));
+  const size_t window = static_cast<size_t>(std::max(0, options_.uniqueness_window));
   std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
   picks.clear();
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
@@ -117,7 +138,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   std::stable_sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance < b.distance; });
   if (picks.size() > wanted)
     picks.resize(wanted);
-  for (size_t i = 0; i < picks.size() && i < static_cast<size_t>(config_.top_k); ++i)
+  for (size_t i = 0; i < picks.size() && i < static_cast<size_t>(options_.top_k); ++i)
     detection.top.push_back(candidateAt(map, picks[i].session, picks[i].column));
 
   // No candidate although the stream's own past exists and nothing else is in the map: the exclusion.
@@ -158,26 +179,26 @@ void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
   }
 }
 
-void MapMatcher::setConfig(const Config& config)
+void MapMatcher::setOptions(const MatchOptions& options)
 {
-  const bool new_kind = (config.max_pace <= 1) != (config_.max_pace <= 1) || config.max_pace != config_.max_pace ||
-                        config.pace_penalty != config_.pace_penalty ||
-                        config.pace_tolerance != config_.pace_tolerance;
+  const bool new_kind = (options.max_pace <= 1) != (options_.max_pace <= 1) || options.max_pace != options_.max_pace ||
+                        options.pace_penalty != options_.pace_penalty ||
+                        options.pace_tolerance != options_.pace_tolerance;
   if (new_kind)
   {
-    config_ = config;
+    options_ = options;
     for (auto& matcher : matchers_)
       matcher = makeMatcher(metric_.layout());
     return;
   }
   for (auto& matcher : matchers_)
   {
-    if (config.sequence_length != config_.sequence_length)
-      matcher->setSequenceLength(config.sequence_length);
-    if (config.bidirectional != config_.bidirectional)
-      matcher->setBidirectional(config.bidirectional);
+    if (options.sequence_length != options_.sequence_length)
+      matcher->setSequenceLength(options.sequence_length);
+    if (options.bidirectional != options_.bidirectional)
+      matcher->setBidirectional(options.bidirectional);
   }
-  config_ = config;
+  options_ = options;
 }
 
 void MapMatcher::reset()

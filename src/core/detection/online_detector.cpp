@@ -58,12 +58,18 @@ double rotationBetween(const std::array<double, 7>& a, const std::array<double, 
 }
 }  // namespace
 
+// The configuration is validated once, here (ValidConfig); the describer and the detector take it as valid.
 OnlineDetector::OnlineDetector(const Config& config, const OnlineOptions& options)
-  : config_(config),
+  : OnlineDetector(ValidConfig(config), options)
+{
+}
+
+OnlineDetector::OnlineDetector(const ValidConfig& config, const OnlineOptions& options)
+  : config_(*config),
     options_(options),
     describer_(config),
     detector_(config),
-    decision_(config),
+    decision_(*config),
     metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
@@ -71,11 +77,16 @@ OnlineDetector::OnlineDetector(const Config& config, const OnlineOptions& option
 }
 
 OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options)
-  : config_(config),
+  : OnlineDetector(ValidConfig(config), std::move(reference_map), options)
+{
+}
+
+OnlineDetector::OnlineDetector(const ValidConfig& config, PlaceDatabase reference_map, const OnlineOptions& options)
+  : config_(*config),
     options_(options),
     describer_(config),
     detector_(config, nonEmpty(std::move(reference_map))),
-    decision_(config),
+    decision_(*config),
     metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
@@ -84,11 +95,17 @@ OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map
 
 OnlineDetector::OnlineDetector(const Config& config, SessionMap map, MapMode mode, SessionInfo session,
                                const OnlineOptions& options)
-  : config_(config),
+  : OnlineDetector(ValidConfig(config), std::move(map), mode, std::move(session), options)
+{
+}
+
+OnlineDetector::OnlineDetector(const ValidConfig& config, SessionMap map, MapMode mode, SessionInfo session,
+                               const OnlineOptions& options)
+  : config_(*config),
     options_(options),
     describer_(config),
     detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, std::move(session)),
-    decision_(config),
+    decision_(*config),
     metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
@@ -344,7 +361,7 @@ void OnlineDetector::updateConfig(const Config& config)
   if (!changed.empty())
     throw Error("cannot change " + changed + " while running: the verifier is built once; restart the detector");
   detector_.updateMatching(config);  // validates and refuses descriptor keys
-  decision_.setConfig(config);
+  decision_.setOptions(DecisionOptions::from(config));
   config_ = config;
 }
 
