@@ -30,7 +30,6 @@
 #include <algorithm>
 #include <array>
 #include <boost/make_shared.hpp>
-#include <cerrno>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -46,6 +45,7 @@
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "openable/io/atomic_file.h"
 #include "openable/io/kitti.h"
 #include "progress.h"
@@ -66,11 +66,7 @@ const char* const kUsage =
     "  --time-offset SEC  added to times.txt (default 1000000000: valid, non-zero ROS times)\n"
     "  --quiet            no progress (frames done, frames/s, time left) and no summary on stderr\n";
 
-class UsageError : public std::runtime_error
-{
-public:
-  using std::runtime_error::runtime_error;
-};
+using openable::cli::UsageError;
 
 struct Options
 {
@@ -84,60 +80,42 @@ struct Options
   std::string compression = "none";
   double time_offset = 1e9;
   bool quiet = false;
+  bool help = false;  // --help: the usage on stderr, nothing else is read
 };
-
-long parseLong(const std::string& flag, const std::string& text)
-{
-  char* end = nullptr;
-  errno = 0;
-  const long value = std::strtol(text.c_str(), &end, 10);
-  if (errno != 0 || end == text.c_str() || *end != '\0' || value < 0)
-    throw UsageError(flag + ": '" + text + "' is not a frame index (expected an integer >= 0)");
-  return value;
-}
 
 Options parseArguments(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
+  openable::cli::Arguments args(argc, argv);
+  while (args.next())
   {
-    const std::string arg = argv[i];
-    const auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc)
-        throw UsageError(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--sequence")
-      o.sequence = value();
-    else if (arg == "--output")
-      o.output = value();
-    else if (arg == "--poses")
-      o.poses = value();
-    else if (arg == "--stereo")
+    if (args.is("--sequence"))
+      o.sequence = args.value();
+    else if (args.is("--output"))
+      o.output = args.value();
+    else if (args.is("--poses"))
+      o.poses = args.value();
+    else if (args.is("--stereo"))
       o.stereo = true;
-    else if (arg == "--color" || arg == "--colour")
+    else if (args.is("--color") || args.is("--colour"))
       o.color = true;
-    else if (arg == "--first")
-      o.first = parseLong(arg, value());
-    else if (arg == "--last")
-      o.last = parseLong(arg, value());
-    else if (arg == "--compression")
-      o.compression = value();
-    else if (arg == "--time-offset")
-    {
-      const std::string text = value();
-      char* end = nullptr;
-      o.time_offset = std::strtod(text.c_str(), &end);
-      if (end == text.c_str() || *end != '\0' || !(o.time_offset >= 0.0) || o.time_offset > 4e9)
-        throw UsageError("--time-offset: '" + text + "', expected seconds in [0, 4e9]");
-    }
-    else if (arg == "--quiet")
+    else if (args.is("--first"))
+      o.first = args.integer(0L, LONG_MAX, "a frame index");
+    else if (args.is("--last"))
+      o.last = args.integer(0L, LONG_MAX, "a frame index");
+    else if (args.is("--compression"))
+      o.compression = args.value();
+    else if (args.is("--time-offset"))
+      o.time_offset = args.number(0.0, 4e9, "seconds");
+    else if (args.is("--quiet"))
       o.quiet = true;
-    else if (arg == "-h" || arg == "--help")
-      throw UsageError("");
+    else if (args.isHelp())
+    {
+      o.help = true;
+      return o;
+    }
     else
-      throw UsageError("unknown argument '" + arg + "'");
+      args.unknown();
   }
   if (o.sequence.empty() || o.output.empty())
     throw UsageError("--sequence and --output are required");
@@ -460,29 +438,27 @@ int run(const Options& o, bool& bag_opened)
 
 int main(int argc, char** argv)
 {
-  Options options;
-  try
-  {
-    options = parseArguments(argc, argv);
-  }
-  catch (const UsageError& e)
-  {
-    if (*e.what())
-      std::cerr << "kitti_to_bag: " << e.what() << "\n";
-    std::cerr << kUsage;
-    return std::string(e.what()).empty() ? 0 : 2;
-  }
-  bool bag_opened = false;
-  try
-  {
-    ros::Time::init();
-    return run(options, bag_opened);
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "kitti_to_bag: error: " << e.what() << "\n";
-    if (bag_opened)
-      std::remove(temporaryBagPath(options.output).c_str());  // no half-written bag; --output untouched
-    return 1;
-  }
+  // A usage error is followed by the usage; bad input reads "kitti_to_bag: error: reason".
+  return openable::cli::runTool({"kitti_to_bag", true, kUsage}, argc, argv,
+                                [](int argc, char** argv)
+                                {
+                                  const Options options = parseArguments(argc, argv);
+                                  if (options.help)
+                                  {
+                                    std::cerr << kUsage;
+                                    return 0;
+                                  }
+                                  bool bag_opened = false;
+                                  try
+                                  {
+                                    ros::Time::init();
+                                    return run(options, bag_opened);
+                                  }
+                                  catch (...)
+                                  {
+                                    if (bag_opened)  // no half-written bag; --output untouched
+                                      std::remove(temporaryBagPath(options.output).c_str());
+                                    throw;
+                                  }
+                                });
 }

@@ -1,20 +1,16 @@
 #include "offline_options.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <iostream>
 
-#include "openable/error.h"
+#include "cli.h"
 
 namespace offline
 {
-namespace
-{
 namespace fs = std::filesystem;
-using openable::Error;
+using openable::cli::UsageError;
 
-const char* kUsage =
+const char* const kUsage =
     "usage: openable_offline --config FILE.yaml --reference PATH [--query PATH] --output DIR\n"
     "                        [--set key=value]... [--reference-right PATH] [--query-right PATH]\n"
     "                        [--ground-truth-tolerance T] [--quiet]\n"
@@ -55,26 +51,6 @@ const char* kUsage =
     "threshold), loop_closures.csv (published loop closures, with query_session,match_session), decisions.csv\n"
     "(every frame), timings.json.\n";
 
-
-
-/// A number of metres or radians from the command line, in [0, max]; `expected` says so in the error.
-double nonNegative(const std::string& option, const std::string& value, double max, const char* expected)
-{
-  size_t used = 0;
-  double v = -1.0;
-  try
-  {
-    v = std::stod(value, &used);
-  }
-  catch (const std::exception&)
-  {
-  }
-  if (used != value.size() || !std::isfinite(v) || v < 0.0 || v > max)
-    throw Error(option + ": '" + value + "' is not allowed; expected " + expected);
-  return v;
-}
-}  // namespace
-
 /// The default session name: the stream's file or folder name.
 std::string nameOfPath(const std::string& path)
 {
@@ -88,87 +64,64 @@ std::string nameOfPath(const std::string& path)
 Options parseArguments(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
+  openable::cli::Arguments args(argc, argv);
+  while (args.next())
   {
-    const std::string arg = argv[i];
-    if (arg == "--quiet")
+    if (args.isHelp())
     {
+      o.help = true;  // the usage, whatever else is given
+      return o;
+    }
+    if (args.is("--quiet"))
       o.quiet = true;
-      continue;
-    }
-    if (arg == "--verify-optional")
-    {
+    else if (args.is("--verify-optional"))
       o.verify_optional = true;
-      continue;
-    }
-    if (arg == "--help" || arg == "-h")
-    {
-      std::cout << kUsage;
-      std::exit(0);
-    }
-    if (i + 1 >= argc)
-      throw Error("option " + arg + " needs a value (see --help)");
-    const std::string value = argv[++i];
-    if (arg == "--config")
-      o.config_path = value;
-    else if (arg == "--reference")
-      o.reference = value;
-    else if (arg == "--reference-right")
-      o.reference_right = value;
-    else if (arg == "--query")
-      o.query = value;
-    else if (arg == "--query-right")
-      o.query_right = value;
-    else if (arg == "--output")
-      o.output = value;
-    else if (arg == "--set")
-      o.sets.push_back(value);
-    else if (arg == "--camera-info")
-      o.camera_info = value;
-    else if (arg == "--map-in")
-      o.map_in = value;
-    else if (arg == "--map-out")
-      o.map_out = value;
-    else if (arg == "--session")
-      o.session = value;
-    else if (arg == "--poses")
-      o.poses = value;
-    else if (arg == "--keyframe-distance")
-      o.keyframe_distance = nonNegative(arg, value, 1e6, "metres in [0, 1e6] (0: every frame)");
-    else if (arg == "--keyframe-angle")
-      o.keyframe_angle = nonNegative(arg, value, M_PI, "radians in [0, pi] (0: off)");
-    else if (arg == "--ground-truth-tolerance")
-    {
-      size_t used = 0;
-      long t = -1;
-      try
-      {
-        t = std::stol(value, &used);
-      }
-      catch (const std::exception&)
-      {
-      }
-      if (used != value.size() || t < 0 || t > 1000000000)
-        throw Error("--ground-truth-tolerance: '" + value +
-                    "' is not allowed; expected frames, an integer in [0, 1e9]");
-      o.ground_truth_tolerance = static_cast<int>(t);
-    }
+    else if (args.is("--config"))
+      o.config_path = args.value();
+    else if (args.is("--reference"))
+      o.reference = args.value();
+    else if (args.is("--reference-right"))
+      o.reference_right = args.value();
+    else if (args.is("--query"))
+      o.query = args.value();
+    else if (args.is("--query-right"))
+      o.query_right = args.value();
+    else if (args.is("--output"))
+      o.output = args.value();
+    else if (args.is("--set"))
+      o.sets.push_back(args.value());
+    else if (args.is("--camera-info"))
+      o.camera_info = args.value();
+    else if (args.is("--map-in"))
+      o.map_in = args.value();
+    else if (args.is("--map-out"))
+      o.map_out = args.value();
+    else if (args.is("--session"))
+      o.session = args.value();
+    else if (args.is("--poses"))
+      o.poses = args.value();
+    else if (args.is("--keyframe-distance"))
+      o.keyframe_distance = args.number(0.0, 1e6, "metres; 0: every frame");
+    else if (args.is("--keyframe-angle"))
+      o.keyframe_angle = args.number(0.0, M_PI, "radians, pi at most; 0: off");
+    else if (args.is("--ground-truth-tolerance"))
+      o.ground_truth_tolerance = args.integer(0, 1000000000, "frames");
     else
-      throw Error("unknown option '" + arg + "' (see --help)");
+      args.unknown();
   }
   if (o.config_path.empty() || o.reference.empty() || o.output.empty())
-    throw Error("--config, --reference and --output are required (see --help)");
+    throw UsageError("--config, --reference and --output are required (see --help)");
   if (o.verify_optional && o.camera_info.empty())
-    throw Error("--verify-optional needs --camera-info (there is nothing to verify without a camera)");
+    throw UsageError("--verify-optional needs --camera-info (there is nothing to verify without a camera)");
   if (!o.camera_info.empty() && !o.query.empty())
-    throw Error(
+    throw UsageError(
         "--camera-info verifies loop closures within one stream; with --query the reference map keeps no features "
         "to verify against (drop --query or --camera-info)");
   if (!o.map_in.empty() && !o.query.empty())
-    throw Error("--map-in continues a map with one stream; with --query the reference traversal is the map "
+    throw UsageError("--map-in continues a map with one stream; with --query the reference traversal is the map "
                 "(drop --query or --map-in)");
   if (o.poses.empty() && (o.keyframe_distance >= 0.0 || o.keyframe_angle >= 0.0))
-    throw Error("--keyframe-distance / --keyframe-angle need --poses (the motion comes from the poses)");
+    throw UsageError("--keyframe-distance / --keyframe-angle need --poses (the motion comes from the poses)");
   if (!o.poses.empty())
   {
     // Unless told otherwise: a keyframe every metre travelled; turning on the spot makes none.

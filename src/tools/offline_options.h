@@ -18,12 +18,15 @@ struct Options
   std::string map_in, map_out, session;
   std::string poses;  // non-empty: keyframes from this trajectory, as a nodelet with ~fixed_frame
   double keyframe_distance = -1.0, keyframe_angle = -1.0;  // < 0: not given (defaults 1 m and 0 with --poses)
+  bool help = false;  // --help: print kUsage, nothing else is read
 };
+
+extern const char* const kUsage;
 
 /// The default session name: the stream's file or folder name.
 std::string nameOfPath(const std::string& path);
 
-/// The options of argv; prints the usage and exits on --help; throws openable::Error on bad usage.
+/// The options of argv (only `help` with --help); throws openable::cli::UsageError on bad usage.
 Options parseArguments(int argc, char** argv);
 
 }  // namespace offline

@@ -30,7 +30,6 @@ namespace fs = std::filesystem;
 
 using openable_eval::kUsage;
 using openable_eval::Options;
-using openable_eval::UsageError;
 
 std::string matrixFile(const std::string& path)
 {
@@ -255,35 +254,18 @@ int scorePublishedSet(const Options& o)
 
 int main(int argc, char** argv)
 {
-  Options options;
-  try
-  {
-    options = openable_eval::parseArguments(argc, argv);
-    if (options.help || argc == 1)
-    {
-      std::cout << kUsage;
-      return argc == 1 ? 2 : 0;
-    }
-    openable_eval::checkOptions(options);
-  }
-  catch (const UsageError& e)
-  {
-    std::cerr << "openable_eval: " << e.what() << "\n";
-    return 2;
-  }
-  try
-  {
-    if (!options.published.empty())
-      return scorePublishedSet(options);
-    return options.compare.empty() ? evaluate(options) : compareGroundTruth(options);
-  }
-  catch (const std::exception& e)
-  {
-    // Error messages of the core are one line naming what and why; keep it one line whatever the source.
-    std::string reason = e.what();
-    for (char& c : reason)
-      c = (c == '\n') ? ' ' : c;
-    std::cerr << "openable_eval: error: " << reason << "\n";
-    return 1;
-  }
+  return openable::cli::runTool({"openable_eval"}, argc, argv,
+                                [](int argc, char** argv)
+                                {
+                                  const Options options = openable_eval::parseArguments(argc, argv);
+                                  if (options.help || argc == 1)
+                                  {
+                                    std::cout << kUsage;
+                                    return argc == 1 ? 2 : 0;
+                                  }
+                                  openable_eval::checkOptions(options);
+                                  if (!options.published.empty())
+                                    return scorePublishedSet(options);
+                                  return options.compare.empty() ? evaluate(options) : compareGroundTruth(options);
+                                });
 }

@@ -1,8 +1,6 @@
 #include "openable_eval_options.h"
 
-#include <cmath>
-#include <cstdlib>
-#include <iostream>
+#include <climits>
 #include <set>
 #include <string>
 
@@ -92,113 +90,60 @@ Ground-truth comparison:
 Exit status: 0 on success, 1 with a one-line reason on stderr for bad input, 2 for bad usage.
 )";
 
-namespace
-{
-
-int parseInt(const std::string& flag, const std::string& text)
-{
-  size_t used = 0;
-  int value = 0;
-  try
-  {
-    value = std::stoi(text, &used);
-  }
-  catch (const std::exception&)
-  {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || value < 0)
-  {
-    throw UsageError(flag + " expects a non-negative integer, got '" + text + "'");
-  }
-  return value;
-}
-
-double parsePositive(const std::string& flag, const std::string& text)
-{
-  size_t used = 0;
-  double value = 0.0;
-  try
-  {
-    value = std::stod(text, &used);
-  }
-  catch (const std::exception&)
-  {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !(value > 0.0) || !std::isfinite(value))
-  {
-    throw UsageError(flag + " expects a positive number, got '" + text + "'");
-  }
-  return value;
-}
-
-/// Takes the next argument as the flag's value.
-std::string takeValue(int argc, char** argv, int& i)
-{
-  if (i + 1 >= argc)
-  {
-    throw UsageError(std::string(argv[i]) + " needs a value");
-  }
-  return argv[++i];
-}
-
-}  // namespace
-
 Options parseArguments(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
+  openable::cli::Arguments args(argc, argv);
+  while (args.next())
   {
-    const std::string flag = argv[i];
-    if (flag == "--help" || flag == "-h")
+    if (args.isHelp())
       o.help = true;
-    else if (flag == "--matrix")
-      o.matrices.push_back(takeValue(argc, argv, i));
-    else if (flag == "--name")
+    else if (args.is("--matrix"))
+      o.matrices.push_back(args.value());
+    else if (args.is("--name"))
     {
       if (o.names.size() + 1 != o.matrices.size())
         throw UsageError("--name must follow its --matrix (one name per matrix)");
-      o.names.push_back(takeValue(argc, argv, i));
+      o.names.push_back(args.value());
     }
-    else if (flag == "--mask")
-      o.mask = takeValue(argc, argv, i);
-    else if (flag == "--mask-dark")
-      o.mask_dark = takeValue(argc, argv, i);
-    else if (flag == "--tolerance")
-      o.tolerance = parseInt(flag, takeValue(argc, argv, i));
-    else if (flag == "--pairs")
-      o.pairs = takeValue(argc, argv, i);
-    else if (flag == "--joined")
-      o.joined = parseInt(flag, takeValue(argc, argv, i));
-    else if (flag == "--truth-matrix")
-      o.truth_matrix = takeValue(argc, argv, i);
-    else if (flag == "--published")
-      o.published = takeValue(argc, argv, i);
-    else if (flag == "--decisions")
-      o.decisions = takeValue(argc, argv, i);
-    else if (flag == "--frames")
-      o.frames = parseInt(flag, takeValue(argc, argv, i));
-    else if (flag == "--pair-tolerance")
-      o.pair_tolerance = parseInt(flag, takeValue(argc, argv, i));
-    else if (flag == "--poses")
-      o.poses = takeValue(argc, argv, i);
-    else if (flag == "--distance")
-      o.distance = parsePositive(flag, takeValue(argc, argv, i));
-    else if (flag == "--exclusion")
-      o.exclusion = parseInt(flag, takeValue(argc, argv, i));
-    else if (flag == "--output")
-      o.output = takeValue(argc, argv, i);
-    else if (flag == "--title")
-      o.title = takeValue(argc, argv, i);
-    else if (flag == "--compare")
-      o.compare = takeValue(argc, argv, i);
-    else if (flag == "--sweep")
+    else if (args.is("--mask"))
+      o.mask = args.value();
+    else if (args.is("--mask-dark"))
+      o.mask_dark = args.value();
+    else if (args.is("--tolerance"))
+      o.tolerance = args.integer(0, INT_MAX, "frames");
+    else if (args.is("--pairs"))
+      o.pairs = args.value();
+    else if (args.is("--joined"))
+      o.joined = args.integer(0, INT_MAX, "a frame");
+    else if (args.is("--truth-matrix"))
+      o.truth_matrix = args.value();
+    else if (args.is("--published"))
+      o.published = args.value();
+    else if (args.is("--decisions"))
+      o.decisions = args.value();
+    else if (args.is("--frames"))
+      o.frames = args.integer(0, INT_MAX, "frames");
+    else if (args.is("--pair-tolerance"))
+      o.pair_tolerance = args.integer(0, INT_MAX, "frames");
+    else if (args.is("--poses"))
+      o.poses = args.value();
+    else if (args.is("--distance"))
+      o.distance = args.positive("metres");
+    else if (args.is("--exclusion"))
+      o.exclusion = args.integer(0, INT_MAX, "frames");
+    else if (args.is("--output"))
+      o.output = args.value();
+    else if (args.is("--title"))
+      o.title = args.value();
+    else if (args.is("--compare"))
+      o.compare = args.value();
+    else if (args.is("--sweep"))
       o.sweep = true;
-    else if (flag == "--quiet")
+    else if (args.is("--quiet"))
       o.quiet = true;
     else
-      throw UsageError("unknown argument '" + flag + "' (see --help)");
+      args.unknown();
   }
   return o;
 }

@@ -1,10 +1,10 @@
 #pragma once
 // openable_eval's command line: the options, their parsing and checks (the modes are in openable_eval.cpp).
 
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "openable/evaluation/evaluation.h"
 
 namespace openable_eval
@@ -12,10 +12,7 @@ namespace openable_eval
 extern const char kUsage[];
 
 /// Bad usage (exit status 2), as opposed to bad input (exit status 1).
-struct UsageError : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
+using openable::cli::UsageError;
 
 struct Options
 {

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "openable/io/atomic_file.h"
 #include "openable/config.h"
 #include "openable/error.h"
@@ -34,10 +35,7 @@ MAP files are written by openable_offline --map-out, the detectors' ~save_map an
 Exit status: 0 on success, 1 with a one-line reason on stderr for bad input, 2 for bad usage.
 )";
 
-struct UsageError : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
+using openable::cli::UsageError;
 
 /// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or a line break.
 std::string csvField(const std::string& text)
@@ -141,7 +139,7 @@ int run(const std::vector<std::string>& args)
   if (args.empty() || args[0] == "--help" || args[0] == "-h")
   {
     if (args.empty())
-      throw UsageError("a command is needed: info, merge or export");
+      throw UsageError("a command is needed: info, merge or export (see --help)");
     std::cout << kUsage;
     return 0;
   }
@@ -153,25 +151,14 @@ int run(const std::vector<std::string>& args)
   if (command == "export" && args.size() == 4 && args[2] == "--csv")
     return exportCsv(args[1], args[3]);
   if (command != "info" && command != "merge" && command != "export")
-    throw UsageError("unknown command '" + command + "'; expected info, merge or export");
-  throw UsageError("wrong arguments for '" + command + "'");
+    throw UsageError("unknown command '" + command + "'; expected info, merge or export (see --help)");
+  throw UsageError("wrong arguments for '" + command + "' (see --help)");
 }
 }  // namespace
 
 int main(int argc, char** argv)
 {
-  try
-  {
-    return run(std::vector<std::string>(argv + 1, argv + argc));
-  }
-  catch (const UsageError& e)
-  {
-    std::cerr << "openable_map: " << e.what() << " (see --help)\n";
-    return 2;
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "openable_map: " << e.what() << "\n";
-    return 1;
-  }
+  // Bad input reads "openable_map: reason" (exit status 1), bad usage the same with 2.
+  return openable::cli::runTool({"openable_map", false}, argc, argv, [](int argc, char** argv)
+                                { return run(std::vector<std::string>(argv + 1, argv + argc)); });
 }

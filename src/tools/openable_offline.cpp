@@ -35,6 +35,7 @@
 #include "openable/view/render.h"
 #include "openable/map/reference_map.h"
 #include "openable/io/staged_output.h"
+#include "cli.h"
 #include "offline_frame_numbers.h"
 #include "offline_options.h"
 #include "offline_traversal.h"
@@ -334,23 +335,14 @@ int run(const Options& options)
 
 int main(int argc, char** argv)
 {
-  Options options;
-  try
-  {
-    options = parseArguments(argc, argv);
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "openable_offline: " << e.what() << "\n";
-    return 2;
-  }
-  try
-  {
-    return run(options);
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "openable_offline: " << e.what() << "\n";
-    return 1;
-  }
+  // Run errors read "openable_offline: reason", as bad usage does (exit status 1 and 2).
+  return openable::cli::runTool({"openable_offline", false}, argc, argv,
+                                [](int argc, char** argv)
+                                {
+                                  const Options options = parseArguments(argc, argv);
+                                  if (!options.help)
+                                    return run(options);
+                                  std::cout << kUsage;
+                                  return 0;
+                                });
 }

@@ -1,7 +1,7 @@
 // openable_soak: a long run of LoopDetector in loop-closure mode, to see what memory does over time
 // (issue 9). Not a test: `make soak` runs it and doc/performance.md reports the figures.
 //
-//   openable_soak [--frames N] [--max-history H] [--every K]
+//   openable_soak [--frames N] [--max-history H] [--every K]   (--help: the usage)
 //
 // Feeds N random LDB-sized descriptors (default 100,000) through LoopDetector with the default
 // configuration and max_history H (default 0 = unbounded) and prints the resident set size every K frames
@@ -17,11 +17,12 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <random>
 #include <string>
 
+#include "cli.h"
 #include "openable/config.h"
-#include "openable/error.h"
 #include "openable/description/frame_describer.h"
 #include "openable/detection/loop_detector.h"
 
@@ -34,32 +35,29 @@ struct Options
   size_t every = 10000;
 };
 
-size_t parseCount(const std::string& flag, const char* text)
-{
-  char* end = nullptr;
-  const long long value = std::strtoll(text, &end, 10);
-  if (end == text || *end != '\0' || value < 0 || value > 100000000)
-    throw openable::Error(flag + ": '" + text + "' is not a count in [0, 100000000]");
-  return static_cast<size_t>(value);
-}
+const char kUsage[] = "usage: openable_soak [--frames N] [--max-history H] [--every K]\n"
+                      "  --frames N       descriptors fed to LoopDetector (default 100000)\n"
+                      "  --max-history H  the detector's max_history (default 0: unbounded)\n"
+                      "  --every K        print the resident set size every K frames (default 10000)\n";
 
-Options parseArguments(int argc, char** argv)
+/// The options; nullopt for --help.
+std::optional<Options> parseArguments(int argc, char** argv)
 {
+  constexpr int kMost = 100000000;
   Options o;
-  for (int i = 1; i < argc; ++i)
+  openable::cli::Arguments args(argc, argv);
+  while (args.next())
   {
-    const std::string flag = argv[i];
-    if (i + 1 >= argc)
-      throw openable::Error(flag + " needs a value (usage: openable_soak [--frames N] [--max-history H] [--every K])");
-    const size_t value = parseCount(flag, argv[++i]);
-    if (flag == "--frames")
-      o.frames = value;
-    else if (flag == "--max-history")
-      o.max_history = static_cast<int>(value);
-    else if (flag == "--every")
-      o.every = std::max<size_t>(1, value);
+    if (args.isHelp())
+      return std::nullopt;
+    if (args.is("--frames"))
+      o.frames = args.integer<size_t>(0, kMost, "frames");
+    else if (args.is("--max-history"))
+      o.max_history = args.integer(0, kMost, "frames; 0: unbounded");
+    else if (args.is("--every"))
+      o.every = std::max<size_t>(1, args.integer<size_t>(0, kMost, "frames"));
     else
-      throw openable::Error("unknown argument '" + flag + "'");
+      args.unknown();
   }
   return o;
 }
@@ -121,14 +119,14 @@ void soak(const Options& o)
 
 int main(int argc, char** argv)
 {
-  try
-  {
-    soak(parseArguments(argc, argv));
-    return 0;
-  }
-  catch (const std::exception& e)
-  {
-    std::cerr << "openable_soak: error: " << e.what() << "\n";
-    return 1;
-  }
+  return openable::cli::runTool({"openable_soak"}, argc, argv,
+                                [](int argc, char** argv)
+                                {
+                                  const std::optional<Options> options = parseArguments(argc, argv);
+                                  if (options)
+                                    soak(*options);
+                                  else
+                                    std::cout << kUsage;
+                                  return 0;
+                                });
 }

@@ -5,10 +5,12 @@
 #include <iostream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "cli.h"
 #include "openable/io/atomic_file.h"
 #include "openable/io/staged_output.h"
 #include "openable/error.h"
@@ -55,10 +57,7 @@ Prints the number of loops, how many agree with the ground truth, and the files 
 Exit status: 0 on success, 1 with a one-line reason on stderr for bad input, 2 for bad usage.
 )";
 
-struct UsageError : std::runtime_error
-{
-  using std::runtime_error::runtime_error;
-};
+using openable::cli::UsageError;
 
 struct Options
 {
@@ -71,88 +70,57 @@ struct Options
   bool help = false;
 };
 
-double parseNumber(const std::string& flag, const std::string& text, double low)
-{
-  size_t used = 0;
-  double value = 0.0;
-  try
-  {
-    value = std::stod(text, &used);
-  }
-  catch (const std::exception&)
-  {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(value) || value < low)
-    throw UsageError(flag + " expects a number >= " + std::to_string(static_cast<int>(low)) + ", got '" + text + "'");
-  return value;
-}
-
-int parseCount(const std::string& flag, const std::string& text)
-{
-  const double value = parseNumber(flag, text, 0.0);
-  if (value != std::floor(value) || value > 1e9)
-    throw UsageError(flag + " expects a whole number >= 0, got '" + text + "'");
-  return static_cast<int>(value);
-}
-
+/// --size WxH: width and height in pixels, from 320x240 to 20000x20000.
 cv::Size parseSize(const std::string& text)
 {
   const size_t x = text.find('x');
-  if (x == std::string::npos)
-    throw UsageError("--size expects WxH, e.g. 1000x800, got '" + text + "'");
-  const cv::Size size(parseCount("--size", text.substr(0, x)), parseCount("--size", text.substr(x + 1)));
-  if (size.width < 320 || size.height < 240 || size.width > 20000 || size.height > 20000)
-    throw UsageError("--size " + text + " is outside 320x240 .. 20000x20000");
-  return size;
+  const std::optional<long long> width = openable::cli::toInteger(text.substr(0, x));
+  const std::optional<long long> height = x == std::string::npos ? std::nullopt
+                                                                 : openable::cli::toInteger(text.substr(x + 1));
+  if (!width || !height || *width < 320 || *height < 240 || *width > 20000 || *height > 20000)
+    throw UsageError("--size: '" + text + "' is not allowed; expected WxH pixels, e.g. 1000x800, from 320x240 to " +
+                     "20000x20000");
+  return cv::Size(static_cast<int>(*width), static_cast<int>(*height));
 }
 
 Options parseArguments(int argc, char** argv)
 {
   Options o;
-  for (int i = 1; i < argc; ++i)
+  openable::cli::Arguments args(argc, argv);
+  while (args.next())
   {
-    const std::string flag = argv[i];
-    const auto value = [&]() -> std::string
-    {
-      if (i + 1 >= argc)
-        throw UsageError(flag + " needs a value");
-      return argv[++i];
-    };
-    if (flag == "--help" || flag == "-h")
+    if (args.isHelp())
       o.help = true;
-    else if (flag == "--loops")
-      o.loops = value();
-    else if (flag == "--poses")
-      o.poses = value();
-    else if (flag == "--geo")
-      o.geo = value();
-    else if (flag == "--times")
-      o.times = value();
-    else if (flag == "--pairs")
-      o.pairs = value();
-    else if (flag == "--pair-tolerance")
-      o.pair_tolerance = parseCount(flag, value());
-    else if (flag == "--distance")
+    else if (args.is("--loops"))
+      o.loops = args.value();
+    else if (args.is("--poses"))
+      o.poses = args.value();
+    else if (args.is("--geo"))
+      o.geo = args.value();
+    else if (args.is("--times"))
+      o.times = args.value();
+    else if (args.is("--pairs"))
+      o.pairs = args.value();
+    else if (args.is("--pair-tolerance"))
+      o.pair_tolerance = args.integer(0, 1000000000, "frames");
+    else if (args.is("--distance"))
     {
-      o.distance = parseNumber(flag, value(), 0.0);
-      o.pose_truth_set = true;
-      if (!(o.distance > 0.0))
-        throw UsageError("--distance expects metres > 0");
-    }
-    else if (flag == "--exclusion")
-    {
-      o.exclusion = parseCount(flag, value());
+      o.distance = args.positive("metres");
       o.pose_truth_set = true;
     }
-    else if (flag == "--output")
-      o.output = value();
-    else if (flag == "--title")
-      o.title = value();
-    else if (flag == "--size")
-      o.size = parseSize(value());
+    else if (args.is("--exclusion"))
+    {
+      o.exclusion = args.integer(0, 1000000000, "frames");
+      o.pose_truth_set = true;
+    }
+    else if (args.is("--output"))
+      o.output = args.value();
+    else if (args.is("--title"))
+      o.title = args.value();
+    else if (args.is("--size"))
+      o.size = parseSize(args.value());
     else
-      throw UsageError("unknown argument '" + flag + "' (see --help)");
+      args.unknown();
   }
   if (o.help)
     return o;
@@ -253,31 +221,15 @@ int run(const Options& o)
 
 int main(int argc, char** argv)
 {
-  Options options;
-  try
-  {
-    options = parseArguments(argc, argv);
-    if (options.help || argc == 1)
-    {
-      std::cout << kUsage;
-      return argc == 1 ? 2 : 0;
-    }
-  }
-  catch (const UsageError& e)
-  {
-    std::cerr << "openable_trajectory: " << e.what() << "\n";
-    return 2;
-  }
-  try
-  {
-    return run(options);
-  }
-  catch (const std::exception& e)
-  {
-    std::string reason = e.what();
-    for (char& c : reason)
-      c = (c == '\n') ? ' ' : c;
-    std::cerr << "openable_trajectory: error: " << reason << "\n";
-    return 1;
-  }
+  return openable::cli::runTool({"openable_trajectory"}, argc, argv,
+                                [](int argc, char** argv)
+                                {
+                                  const Options options = parseArguments(argc, argv);
+                                  if (options.help || argc == 1)
+                                  {
+                                    std::cout << kUsage;
+                                    return argc == 1 ? 2 : 0;
+                                  }
+                                  return run(options);
+                                });
 }
