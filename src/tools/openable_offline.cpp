@@ -65,7 +65,7 @@ openable::Config loadConfig(const Options& o)
     config.set(assignment.substr(0, eq), assignment.substr(eq + 1));
   }
   config.validateOrThrow();
-  const bool stereo = config.camera_type == "stereo";
+  const bool stereo = config.camera() == openable::CameraType::Stereo;
   if (stereo && (o.reference_right.empty() || (!o.query.empty() && o.query_right.empty())))
     throw Error("camera_type stereo needs --reference-right (and --query-right with --query)");
   if (!stereo && (!o.reference_right.empty() || !o.query_right.empty()))
@@ -134,7 +134,7 @@ int run(const Options& options)
     online.verify_required = !options.verify_optional;
     if (!options.quiet)
       std::cerr << "verifying loop closures with " << options.camera_info << " ("
-                << (camera.stereo() && config.camera_type == "stereo" ? "stereo" : "mono")
+                << (camera.stereo() && config.camera() == openable::CameraType::Stereo ? "stereo" : "mono")
                 << (online.verify_required ? ", required)\n" : ", optional)\n");
   }
   // Odometry: the poses a nodelet would look up in ~fixed_frame, and its keyframe parameters.
@@ -217,7 +217,7 @@ int run(const Options& options)
   openable::Progress progress(localisation ? "openable_offline: query" : "openable_offline", stream.size(),
                               options.quiet);
   std::vector<std::vector<float>> rows;  // per stream file: distances by frame number (empty = not described)
-  const bool panoramic = config.camera_type == "panoramic";
+  const bool panoramic = config.camera() == openable::CameraType::Panoramic;
   openable::LoopCsvWriter csv(panoramic);
   std::map<std::string, size_t> status_counts;
   size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;
