@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -47,6 +48,35 @@ enum class PaceKernel
 std::string paceKernelName(PaceKernel kernel);
 /// Kernels this CPU runs, slowest first (kBest not among them).
 std::vector<PaceKernel> supportedPaceKernels();
+
+/// Storage on 64-byte boundaries: the kernels' vectors then load and store whole cache lines.
+template <typename T>
+struct CacheAligned
+{
+  using value_type = T;
+  CacheAligned() = default;
+  template <typename U>
+  CacheAligned(const CacheAligned<U>&)
+  {
+  }
+  T* allocate(size_t n)
+  {
+    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(64)));
+  }
+  void deallocate(T* p, size_t)
+  {
+    ::operator delete(p, std::align_val_t(64));
+  }
+  bool operator==(const CacheAligned&) const
+  {
+    return true;
+  }
+  bool operator!=(const CacheAligned&) const
+  {
+    return false;
+  }
+};
+using AlignedCosts = std::vector<int16_t, CacheAligned<int16_t>>;
 
 struct PaceOptions
 {
@@ -104,15 +134,15 @@ private:
   /// raw_ for the chunk of columns [begin, begin + m), with tolerance_ neighbours on each side.
   void distances(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m);
   /// Keeps a buffer of costs aligned: drops `front` evicted places, keeps `size` places, new ones at `prior`.
-  void resizeCosts(std::vector<int16_t>& costs, size_t front, size_t size);
+  void resizeCosts(AlignedCosts& costs, size_t front, size_t size);
   /// The costs of pace `pace` over chunk `chunk` of a buffer, at place 0 of the chunk.
-  int16_t* segment(std::vector<int16_t>& costs, size_t chunk, size_t pace) const
+  int16_t* segment(AlignedCosts& costs, size_t chunk, size_t pace) const
   {
-    return costs.data() + (chunk * slopes_.size() + pace) * segment_ + pad_;
+    return costs.data() + (chunk * slopes_.size() + pace) * segment_ + margin_;
   }
   /// The buffer that holds a pace's costs of the last frame.
-  std::vector<int16_t>& current(size_t pace);
-  const std::vector<int16_t>& current(size_t pace) const;
+  AlignedCosts& current(size_t pace);
+  const AlignedCosts& current(size_t pace) const;
   /// The smallest normalized() of chunk `chunk`, leaving out columns within `window` of a taken one.
   float chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const;
   float value(size_t column, int* direction) const;
@@ -135,21 +165,22 @@ private:
   int16_t prior_ = 0;    ///< the previous row's mean frame distance: the start of a place that joins the row
   /// C[j, v]: per chunk of kChunk places, per pace, a segment of pad_ places, the chunk's places and pad_ more
   /// (paces read up to pad_ places beyond the chunk; the padding holds copies of those).
-  std::vector<int16_t> costs_;
-  std::vector<int16_t> reverse_;  ///< with bidirectional: reverse paces read one buffer and write the other
+  AlignedCosts costs_;
+  AlignedCosts reverse_;  ///< with bidirectional: reverse paces read one buffer and write the other
   bool flipped_ = false;          ///< the reverse paces' last costs are in reverse_
   size_t pad_ = 4;  ///< more places than any pace advances in a frame
-  size_t segment_ = 0;  ///< kChunk + 2 pad_
+  size_t margin_ = 32;  ///< pad_ rounded up to whole vectors: every segment's places start on a cache line
+  size_t segment_ = 0;  ///< kChunk + 2 margin_
   std::vector<int16_t> best_;      ///< M[j] at pad_ + j: the smallest of a place's costs, judged by its own distance
   std::vector<int16_t> old_best_;  ///< the previous frame's M, while match() runs
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;     ///< frame distances
-  std::vector<int16_t> entry_;    ///< the entry terms of the kernel
-  std::vector<int16_t> extra_;
-  std::vector<int16_t> smallest_;
-  std::vector<int16_t> with_change_;
+  AlignedCosts entry_;    ///< the entry terms of the kernel
+  AlignedCosts extra_;
+  AlignedCosts smallest_;
+  AlignedCosts with_change_;
 };
 
 }  // namespace openable

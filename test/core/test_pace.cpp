@@ -128,7 +128,7 @@ TEST(PaceMatcher, StaysWithinItsRoundingOfTheFloatRecurrenceAcrossChunksGrowthAn
     NaivePace naive(layout, 7, matcher.paces(), 3.0f);
     for (int t = 0; t < 40; ++t)
     {
-      // The reference grows by 23 places a frame: rows cross the 256-column chunks, new places join each row.
+      // The reference grows by 23 places a frame: new places join each row (test_pace_kernels crosses chunks).
       for (int k = 0; k < 23; ++k)
         reference.add(randomDescriptor(rng, 2), FrameInfo());
       const auto query = randomDescriptor(rng, 2);

@@ -160,7 +160,7 @@ TEST(PaceKernels, EveryKernelEqualsTheFixedPointRecurrence)
   for (PaceKernel kernel : supportedPaceKernels())
     for (bool bidirectional : {false, true})
       for (int tolerance : {0, 1, 2})
-        for (size_t capacity : {size_t(0), size_t(700)})
+        for (size_t capacity : {size_t(0), size_t(3000)})
         {
           const std::string what = paceKernelName(kernel) + (bidirectional ? " bidirectional" : " forward") +
                                    " tolerance " + std::to_string(tolerance) + " capacity " +
@@ -175,9 +175,9 @@ TEST(PaceKernels, EveryKernelEqualsTheFixedPointRecurrence)
           NaiveFixedPace naive(layout, 7, matcher.paces(), options.penalty, tolerance);
           for (int t = 0; t < 45; ++t)
           {
-            // 23 places a frame: rows cross the chunks of 256 columns, new places join every row, and past 700
-            // the oldest leave. Five stay out of the row (the exclusion window).
-            for (int k = 0; k < 23; ++k)
+            // 101 places a frame: rows cross the chunks of 2048 columns (twice), new places join every row, and
+            // past 3000 the oldest leave. Five stay out of the row (the exclusion window).
+            for (int k = 0; k < 101; ++k)
               reference.add(randomDescriptor(rng, 2), FrameInfo());
             const auto query = queryAt(rng, reference, t);
             const size_t candidates = reference.size() - 5;
