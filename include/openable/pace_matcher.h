@@ -31,12 +31,12 @@ namespace openable
 /// whatever L and max_pace are, fused with one pass over the costs, chunk by chunk (the chunk's distances stay
 /// in L1): the costs are 16-bit fixed point (1.0 = 32767, products rounded, sums saturated), 2 bytes a place and
 /// pace, so a frame moves 48 + 17 x 4 bytes a place rather than 48 + 17 x 8, and a vector holds 16 or 32 places.
-/// The rounding adds at most about 3 L units of 1 / 32767 to a cost (test_pace_kernels bounds it); every kernel
-/// (portable, AVX2, AVX-512BW, chosen at run time) computes the same integers.
+/// The rounding moves a cost by at most about 3 L units of 1 / 32767 from the float recurrence (test_pace checks
+/// it); every kernel (portable, AVX2, AVX-512BW, chosen at run time) computes the same integers (test_pace_kernels).
 ///
 /// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
 /// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
-/// How PaceMatcher follows a revisit (Config's max_pace, pace_penalty, pace_tolerance).
+///
 /// The kernels of a frame's update; each one gives the same numbers (kBest: the fastest this CPU runs).
 enum class PaceKernel
 {
@@ -78,6 +78,7 @@ struct CacheAligned
 };
 using AlignedCosts = std::vector<int16_t, CacheAligned<int16_t>>;
 
+/// How PaceMatcher follows a revisit (Config's max_pace, pace_penalty, pace_tolerance).
 struct PaceOptions
 {
   int max_pace = 3;        ///< paces from 1 / max_pace to max_pace places per frame

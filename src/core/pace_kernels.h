@@ -22,7 +22,7 @@ namespace pace_kernels
 constexpr int32_t kOne = 32767;
 
 /// One pace over a chunk: the previous costs of its places and where this frame's go (the same memory for a
-/// forward pace, updated in place from the last place down; another buffer for a reverse one).
+/// forward pace, updated in place; another buffer for a reverse one).
 struct PaceRow
 {
   const int16_t* from;  ///< previous frame's costs, indexed by place in the chunk; valid from -pad to m + pad
@@ -68,8 +68,10 @@ struct ChunkSums
   int16_t minimum = kOne;  ///< the smallest M of the chunk
 };
 
-/// Updates every pace's costs and M for the chunk's places, the last place first (forward rows are updated in
-/// place: a place reads the previous costs of places before it, not yet overwritten).
+/// Updates every pace's costs and M for the chunk's places. Forward rows are updated in place: the portable and
+/// AVX2 kernels go from the chunk's last place down (a place reads places before it, not yet overwritten), the
+/// AVX-512 one up, carrying the previous costs of the places behind in a register. The chunk's padding holds the
+/// previous costs of the places beyond it.
 using ChunkFn = ChunkSums (*)(const Chunk&);
 
 ChunkSums chunkPortable(const Chunk& chunk);  // pace_kernels.cpp

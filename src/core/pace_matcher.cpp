@@ -247,7 +247,8 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.entry = entry_.data();
   chunk.extra = extra_.data();
   // The places each pace advances this frame: a path comes from j - step (forward) or j + step (reverse). A
-  // forward row is updated in place (the last place first); a reverse one goes to the other buffer.
+  // forward row is updated in place (a kernel never overwrites a place before reading what reads it); a reverse
+  // one goes to the other buffer.
   std::vector<pace_kernels::PaceRow> rows(paces);
   std::vector<long> offsets;
   std::vector<uint8_t> slot(paces);
