@@ -48,7 +48,7 @@ done
 objects=()
 for source in "$root"/src/core/hamming/*.cpp "$root/test/core/test_hamming.cpp"; do
   object=$out/$(basename "$source" .cpp).o
-  "$cxx" "${flags[@]}" -Wall -Wextra -Werror -I"$root/include" -I"$gtest/include" -c "$source" -o "$object"
+  "$cxx" "${flags[@]}" -Wall -Wextra -Werror -I"$root/include" -I"$root/src/core" -I"$gtest/include" -c "$source" -o "$object"
   objects+=("$object")
 done
 for x86 in hamming_x86 hamming_avx512; do

@@ -3,7 +3,7 @@
 # catkin workspace, prints the failures and catkin_test_results' summary, and ends with the plain line
 # "N passed, N failed". Exits non-zero when a test failed, errored or did not produce a result.
 set -o pipefail  # no -u: ROS setup scripts read unset variables
-ws=${1:?usage: run_tests.sh CATKIN_WORKSPACE}
+ws=$(cd "${1:?usage: run_tests.sh CATKIN_WORKSPACE}" && pwd)
 root=$(cd "$(dirname "$0")/.." && pwd)
 log=$root/build/run_tests.log
 export PATH=/usr/bin:/bin:$PATH ROS_HOME=$root/build/ros_home ROS_LOG_DIR=$root/build/ros_home/log
@@ -35,6 +35,33 @@ if [ $run_rc -ne 0 ] && [ $failed -eq 0 ]; then
   failed=1
 fi
 
+# One more test: the numbers README.md, doc/ros_api.md and doc/kitti.md quote from runs against this run's:
+# the properties the tests recorded in their results, the demo's output and what kitti.launch decides on a
+# 160-frame KITTI bag (scripts/kitti_short_bag.sh, as shipped and with exclusion_window:=20); the check is
+# test/docs/check_doc_numbers.py.
+docs_log=$root/build/doc_numbers.log
+{
+  bash "$root/scripts/demo.sh" "$ws" > "$root/build/demo.log" 2>&1 || echo "scripts/demo.sh failed: see $root/build/demo.log"
+  bash "$root/scripts/kitti_short_bag.sh" "$ws" > "$root/build/kitti160.log" 2>&1 ||
+    echo "scripts/kitti_short_bag.sh failed: see $root/build/kitti160.log"
+  bash "$root/scripts/kitti_short_bag.sh" "$ws" exclusion_window:=20 > "$root/build/kitti160_ew20.log" 2>&1 ||
+    echo "scripts/kitti_short_bag.sh exclusion_window:=20 failed: see $root/build/kitti160_ew20.log"
+  python3 "$root/test/docs/check_doc_numbers.py" --self-test &&
+    python3 "$root/test/docs/check_doc_numbers.py" --results build/test_results/openable_ros \
+      --output demo="$root/build/demo.log" --output kitti160="$root/build/kitti160.log" \
+      --output kitti160_ew20="$root/build/kitti160_ew20.log" \
+      "$root/README.md" "$root/doc/ros_api.md" "$root/doc/kitti.md"
+} > "$docs_log" 2>&1
+docs_rc=$?
+tests=$((tests + 1))
+if [ $docs_rc -eq 0 ]; then
+  tail -n 1 "$docs_log"
+else
+  tail -n 40 "$docs_log"
+  failures=$((failures + 1))
+  failed=$((failed + 1))
+fi
+
 # One more test where an aarch64 compiler is installed (install_deps.sh): the Hamming kernels and their test
 # built for aarch64 without ROS, run under qemu-user (scripts/cross_check_aarch64.sh, output in build/).
 if command -v aarch64-linux-gnu-g++ > /dev/null || [ "$(uname -m)" = aarch64 ]; then
@@ -51,6 +78,14 @@ if command -v aarch64-linux-gnu-g++ > /dev/null || [ "$(uname -m)" = aarch64 ]; 
       failed=$((failed + 1))
     fi
   fi
+fi
+
+# One more test: no header outside the C/C++ library, OpenCV, yaml-cpp, Eigen, Ceres and the core's own
+# reached the core's objects (ROS's headers share /usr/include on Debian, so no include path can keep them out).
+tests=$((tests + 1))
+if ! python3 "$root/scripts/check_core_ros_free.py" "$PWD"; then
+  failures=$((failures + 1))
+  failed=$((failed + 1))
 fi
 echo "$((tests - errors - failures)) passed, $failed failed"
 [ $failed -eq 0 ] && [ $results_rc -eq 0 ]

@@ -14,6 +14,20 @@ constexpr uint64_t kWorkingBytesPerPatchPixel = 16;
 /// refused by validate() instead of failing in an allocation.
 constexpr uint64_t kMaxWorkingBytesPerFrame = uint64_t(1) << 30;
 
+/// camera_type, parsed.
+enum class CameraType
+{
+  Mono,
+  Stereo,
+  Panoramic
+};
+/// description_type, parsed.
+enum class DescriptionType
+{
+  Global,  ///< the whole image is one patch (per sub-panorama)
+  Grid     ///< grid_x x grid_y patches
+};
+
 /// Every parameter of the toolbox. The same snake_case keys are used in YAML files, on the command line
 /// (`--set key=value`) and as private ROS parameters of the nodelets. The member defaults are
 /// config/default.yaml's values (a test keeps them equal), so a bare nodelet, `openable_offline` without
@@ -137,7 +151,9 @@ struct Config
   /// Keys that can change while running (the `live` ones), in documentation order.
   static const std::vector<std::string>& liveKeys();
 
-  bool isBinaryDescriptor() const;
+  /// camera_type and description_type as enums. Throw Error for a word validate() refuses.
+  CameraType camera() const;
+  DescriptionType description() const;
 };
 
 /// The candidate with the smallest edit distance to `name` (for "did you mean" messages); "" when empty.

@@ -9,9 +9,9 @@
 #include <opencv2/core.hpp>
 #include <string>
 
-#include "openable/geometric_verifier.h"
-#include "openable/online_detector.h"
-#include "openable/place_database.h"
+#include "openable/verification/geometric_verifier.h"
+#include "openable/detection/online_detector.h"
+#include "openable/map/place_database.h"
 #include "openable_ros/LoopClosure.h"
 
 namespace openable_ros

@@ -5,8 +5,8 @@
 
 #include <string>
 
-#include "openable/loop_detector.h"
-#include "openable/online_detector.h"
+#include "openable/detection/loop_detector.h"
+#include "openable/detection/online_detector.h"
 
 namespace openable_ros
 {

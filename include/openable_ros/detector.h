@@ -11,17 +11,17 @@
 #include <string>
 #include <vector>
 
-#include "openable/online_detector.h"
-#include "openable/sync_watch.h"
-#include "openable/throttle.h"
+#include "openable/detection/online_detector.h"
+#include "openable/node_support/sync_watch.h"
+#include "openable/node_support/throttle.h"
 #include "openable_ros/LoopClosure.h"
 #include "openable_ros/detector_diagnostics.h"
-#include "openable/fix_history.h"
+#include "openable/node_support/fix_history.h"
 #include "openable_ros/loop_markers.h"
 #include "openable_ros/matrix_publisher.h"
 #include "openable_ros/pose_lookup.h"
 #include "openable_ros/ros_parameters.h"
-#include "openable/sequence_gaps.h"
+#include "openable/node_support/sequence_gaps.h"
 
 namespace openable_ros
 {

@@ -7,7 +7,7 @@
 #include <map>
 #include <string>
 
-#include "openable/online_detector.h"
+#include "openable/detection/online_detector.h"
 #include "openable_ros/ros_parameters.h"
 
 namespace openable_ros

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "openable/config.h"
-#include "openable/distance_matrix_view.h"
+#include "openable/view/distance_matrix_view.h"
 
 namespace openable_ros
 {

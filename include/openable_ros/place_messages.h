@@ -2,8 +2,8 @@
 
 #include <std_msgs/Header.h>
 
-#include "openable/candidate_merger.h"
-#include "openable/place_server.h"
+#include "openable/server/candidate_merger.h"
+#include "openable/server/place_server.h"
 #include "openable_ros/LoopClosure.h"
 #include "openable_ros/PlaceCandidates.h"
 #include "openable_ros/PlaceDescriptor.h"

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "openable/candidate_merger.h"
-#include "openable/place_server.h"
-#include "openable/throttle.h"
+#include "openable/server/candidate_merger.h"
+#include "openable/server/place_server.h"
+#include "openable/node_support/throttle.h"
 #include "openable_ros/LoadMap.h"
 #include "openable_ros/PlaceDescriptor.h"
 #include "openable_ros/SaveMap.h"

@@ -10,7 +10,7 @@
 #include <fstream>
 
 #include "config_keys.h"
-#include "openable/descriptor_extractor.h"
+#include "openable/descriptors/descriptor_registry.h"
 #include "openable/error.h"
 
 namespace openable
@@ -40,9 +40,46 @@ std::string oneOf(const std::vector<std::string>& values)
 
 }  // namespace
 
-bool Config::isBinaryDescriptor() const
+namespace
 {
-  return !(descriptor == "SIFT" || descriptor == "SURF" || descriptor == "HOG");
+// The words of camera_type and description_type and what they parse to: the one place they are spelled.
+const std::vector<std::pair<std::string, CameraType>> kCameraWords = {
+    {"mono", CameraType::Mono}, {"stereo", CameraType::Stereo}, {"panoramic", CameraType::Panoramic}};
+const std::vector<std::pair<std::string, DescriptionType>> kDescriptionWords = {
+    {"global", DescriptionType::Global}, {"grid", DescriptionType::Grid}};
+
+template <class Enum>
+const Enum* parseWord(const std::vector<std::pair<std::string, Enum>>& words, const std::string& word)
+{
+  for (const auto& w : words)
+    if (w.first == word)
+      return &w.second;
+  return nullptr;
+}
+
+template <class Enum>
+std::vector<std::string> wordsOf(const std::vector<std::pair<std::string, Enum>>& words)
+{
+  std::vector<std::string> out;
+  for (const auto& w : words)
+    out.push_back(w.first);
+  return out;
+}
+}  // namespace
+
+CameraType Config::camera() const
+{
+  if (const CameraType* type = parseWord(kCameraWords, camera_type))
+    return *type;
+  throw Error("camera_type: value '" + camera_type + "' is not allowed; expected " + oneOf(wordsOf(kCameraWords)));
+}
+
+DescriptionType Config::description() const
+{
+  if (const DescriptionType* type = parseWord(kDescriptionWords, description_type))
+    return *type;
+  throw Error("description_type: value '" + description_type + "' is not allowed; expected " +
+              oneOf(wordsOf(kDescriptionWords)));
 }
 
 std::vector<std::string> Config::validate() const
@@ -74,30 +111,35 @@ std::vector<std::string> Config::validate() const
   }
 
   // Rules beyond a range.
-  const std::vector<std::string> cameras = {"mono", "stereo", "panoramic"};
-  if (std::find(cameras.begin(), cameras.end(), camera_type) == cameras.end())
-    bad("camera_type", camera_type, oneOf(cameras));
-  if (description_type != "global" && description_type != "grid")
-    bad("description_type", description_type, "global | grid");
-  if (description_type == "global" && (grid_x != 1 || grid_y != 1))
+  const CameraType* camera_parsed = parseWord(kCameraWords, camera_type);
+  if (!camera_parsed)
+    bad("camera_type", camera_type, oneOf(wordsOf(kCameraWords)));
+  const DescriptionType* description_parsed = parseWord(kDescriptionWords, description_type);
+  if (!description_parsed)
+    bad("description_type", description_type, oneOf(wordsOf(kDescriptionWords)));
+  else if (*description_parsed == DescriptionType::Global && (grid_x != 1 || grid_y != 1))
     bad("grid_x/grid_y", std::to_string(grid_x) + "x" + std::to_string(grid_y),
         "1x1 with description_type global (set description_type: grid to use a grid)");
   const uint64_t working_bytes = workingBytesPerFrame();
   if (working_bytes > kMaxWorkingBytesPerFrame)
-    bad("patch_size/grid_x/grid_y" + std::string(camera_type == "panoramic" ? "/panoramas" : ""),
+  {
+    const bool panoramic = camera_parsed && *camera_parsed == CameraType::Panoramic;
+    bad("patch_size/grid_x/grid_y" + std::string(panoramic ? "/panoramas" : ""),
         std::to_string(patch_size) + " px, " + std::to_string(grid_x) + "x" + std::to_string(grid_y) + " cells" +
-            (camera_type == "panoramic" ? ", " + std::to_string(panoramas) + " panoramas" : ""),
+            (panoramic ? ", " + std::to_string(panoramas) + " panoramas" : ""),
         "at most " + std::to_string(kMaxWorkingBytesPerFrame) + " bytes of images per frame; this asks for " +
             std::to_string(working_bytes) + " bytes per frame (" + std::to_string(kWorkingBytesPerPatchPixel) +
             " bytes per patch pixel)");
+  }
   if (patch_normalization > patch_size && patch_size >= 8)
     bad("patch_normalization", std::to_string(patch_normalization),
         "an integer in [0, " + std::to_string(patch_size) + "] (at most patch_size)");
-  const auto& names = descriptorNames();
-  if (std::find(names.begin(), names.end(), descriptor) == names.end())
-    bad("descriptor", descriptor, oneOf(names));
-  else if (descriptor == "D-LDB" && camera_type != "stereo")
-    bad("descriptor", descriptor, "a mono descriptor (D-LDB needs camera_type stereo)");
+  const DescriptorInfo* descriptor_row = findDescriptor(descriptor);
+  if (!descriptor_row)
+    bad("descriptor", descriptor, oneOf(descriptorNames()));
+  else if (descriptor_row->needs_disparity && !(camera_parsed && *camera_parsed == CameraType::Stereo))
+    bad("descriptor", descriptor,
+        "a mono descriptor (" + descriptor + " describes disparity and needs camera_type stereo)");
   if (min_sequence_length > sequence_length && sequence_length >= 1)
     bad("min_sequence_length", std::to_string(min_sequence_length),
         "an integer in [0, " + std::to_string(sequence_length) + "] (at most sequence_length)");
@@ -126,8 +168,11 @@ uint64_t Config::workingBytesPerFrame() const
   // neither wrap nor hide the figure, so negatives count as 0 and products saturate.
   const auto field = [](int v) { return uint64_t(std::max(v, 0)); };
   const auto times = [](uint64_t a, uint64_t b) { return (b != 0 && a > UINT64_MAX / b) ? UINT64_MAX : a * b; };
-  uint64_t cells = description_type == "grid" ? times(field(grid_x), field(grid_y)) : 1;
-  if (camera_type == "panoramic")
+  // Parsed without throwing: this runs inside validate(), on values it may yet refuse.
+  const DescriptionType* description_parsed = parseWord(kDescriptionWords, description_type);
+  const CameraType* camera_parsed = parseWord(kCameraWords, camera_type);
+  uint64_t cells = description_parsed && *description_parsed == DescriptionType::Grid ? times(field(grid_x), field(grid_y)) : 1;
+  if (camera_parsed && *camera_parsed == CameraType::Panoramic)
     cells = times(cells, field(panoramas));
   return times(times(cells, times(field(patch_size), field(patch_size))), kWorkingBytesPerPatchPixel);
 }

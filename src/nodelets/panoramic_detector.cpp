@@ -5,7 +5,7 @@
 
 #include <pluginlib/class_list_macros.hpp>
 
-#include "openable/ring_sync.h"
+#include "openable/node_support/ring_sync.h"
 #include "openable_ros/conversions.h"
 #include "openable_ros/detector.h"
 

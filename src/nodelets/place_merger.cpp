@@ -7,8 +7,8 @@
 #include <mutex>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "openable/answer_collector.h"
-#include "openable/throttle.h"
+#include "openable/server/answer_collector.h"
+#include "openable/node_support/throttle.h"
 #include "openable_ros/place_messages.h"
 #include "openable_ros/params.h"
 

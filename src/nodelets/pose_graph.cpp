@@ -59,7 +59,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/pose_graph_builder.h"
+#include "openable/pose_graph/pose_graph_builder.h"
 #include "openable_ros/LoopClosure.h"
 #include "openable_ros/params.h"
 

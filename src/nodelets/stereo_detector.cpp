@@ -14,7 +14,7 @@
 #include <memory>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "openable/stereo.h"
+#include "openable/description/stereo.h"
 #include "openable_ros/conversions.h"
 #include "openable_ros/detector.h"
 

@@ -2,7 +2,7 @@
 
 #include <boost/make_shared.hpp>
 
-#include "openable/session_map.h"
+#include "openable/map/session_map.h"
 #include "openable_ros/PlaceDescriptor.h"
 #include "openable_ros/conversions.h"
 

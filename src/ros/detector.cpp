@@ -5,9 +5,9 @@
 #include <fstream>
 
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/input_contract.h"
-#include "openable/trajectory_export.h"
+#include "openable/description/frame_describer.h"
+#include "openable/description/input_contract.h"
+#include "openable/view/trajectory_export.h"
 #include "openable_ros/conversions.h"
 #include "openable_ros/descriptor_publisher.h"
 #include "openable_ros/live_reconfigure.h"

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "openable/error.h"
-#include "openable/reference_map.h"
+#include "openable/map/reference_map.h"
 #include "openable_ros/detector.h"
 
 namespace openable_ros

@@ -2,7 +2,7 @@
 
 #include <boost/make_shared.hpp>
 
-#include "openable/input_contract.h"
+#include "openable/description/input_contract.h"
 #include "openable_ros/conversions.h"
 
 namespace openable_ros

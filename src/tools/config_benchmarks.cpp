@@ -28,10 +28,10 @@
 #include <vector>
 
 #include "openable/config.h"
-#include "openable/frame_describer.h"
-#include "openable/pace_matcher.h"
-#include "openable/place_database.h"
-#include "openable/sequence_matcher.h"
+#include "openable/description/frame_describer.h"
+#include "openable/matching/pace_matcher.h"
+#include "openable/map/place_database.h"
+#include "openable/matching/sequence_matcher.h"
 
 namespace openable_bench
 {

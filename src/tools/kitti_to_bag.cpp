@@ -46,9 +46,9 @@
 #include <string>
 #include <vector>
 
-#include "openable/atomic_file.h"
-#include "openable/kitti.h"
-#include "openable/progress.h"
+#include "openable/io/atomic_file.h"
+#include "openable/io/kitti.h"
+#include "progress.h"
 
 namespace
 {

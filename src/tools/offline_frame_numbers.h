@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "openable/session_map.h"
+#include "openable/map/session_map.h"
 
 /// The frame numbers openable_offline writes (matrix columns, the query and match of loop_closures.csv):
 /// the files of this run, counted as decoded. A continued map's sessions come first, by their ids, and the

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "openable/error.h"
-#include "openable/image_source.h"
-#include "openable/online_detector.h"
+#include "openable/io/image_source.h"
+#include "openable/detection/online_detector.h"
 
 namespace offline
 {

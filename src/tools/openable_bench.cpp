@@ -19,11 +19,12 @@
 #include <vector>
 
 #include "config_benchmarks.h"
-#include "openable/frame_describer.h"
-#include "openable/frame_metric.h"
-#include "openable/hamming.h"
-#include "openable/place_database.h"
-#include "openable/sequence_matcher.h"
+#include "openable/description/frame_describer.h"
+#include "openable/descriptors/descriptor_registry.h"
+#include "openable/matching/frame_metric.h"
+#include "openable/hamming/hamming.h"
+#include "openable/map/place_database.h"
+#include "openable/matching/sequence_matcher.h"
 
 namespace
 {
@@ -160,9 +161,10 @@ void describeInvariant(benchmark::State& state)
 
 void registerAll()
 {
-  for (const auto& name : openable::descriptorNames())
-    if (name != "D-LDB")
-      benchmark::RegisterBenchmark(("BM_Describe/" + name).c_str(), describe, name)->Unit(benchmark::kMicrosecond);
+  for (const auto& row : openable::descriptorRegistry())
+    if (!row.needs_disparity)  // a mono image has no disparity to describe
+      benchmark::RegisterBenchmark((std::string("BM_Describe/") + row.name).c_str(), describe, std::string(row.name))
+          ->Unit(benchmark::kMicrosecond);
   benchmark::RegisterBenchmark("BM_Describe/LDB_illumination_invariant", describeInvariant)
       ->Unit(benchmark::kMicrosecond);
   const size_t sizes[] = {1000, 10000, 100000, 1000000};

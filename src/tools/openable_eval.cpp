@@ -12,16 +12,16 @@
 #include <string>
 #include <vector>
 
-#include "openable/atomic_file.h"
+#include "openable/io/atomic_file.h"
 #include "openable/error.h"
-#include "openable/evaluation.h"
-#include "openable/ground_truth_sources.h"
-#include "openable/image_source.h"
-#include "openable/loop_csv.h"
-#include "openable/npy.h"
-#include "openable/progress.h"
-#include "openable/staged_output.h"
-#include "openable/published_scoring.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/evaluation/ground_truth_sources.h"
+#include "openable/io/image_source.h"
+#include "openable/detection/loop_csv.h"
+#include "openable/io/npy.h"
+#include "progress.h"
+#include "openable/io/staged_output.h"
+#include "openable/evaluation/published_scoring.h"
 #include "openable_eval_options.h"
 
 namespace

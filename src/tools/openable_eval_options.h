@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/evaluation.h"
+#include "openable/evaluation/evaluation.h"
 
 namespace openable_eval
 {

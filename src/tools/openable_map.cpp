@@ -6,12 +6,12 @@
 #include <string>
 #include <vector>
 
-#include "openable/atomic_file.h"
+#include "openable/io/atomic_file.h"
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/map_replay.h"
-#include "openable/session_map.h"
-#include "openable/staged_output.h"
+#include "openable/detection/map_replay.h"
+#include "openable/map/session_map.h"
+#include "openable/io/staged_output.h"
 
 namespace
 {

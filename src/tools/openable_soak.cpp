@@ -22,8 +22,8 @@
 
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/loop_detector.h"
+#include "openable/description/frame_describer.h"
+#include "openable/detection/loop_detector.h"
 
 namespace
 {

@@ -9,14 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "openable/atomic_file.h"
-#include "openable/staged_output.h"
+#include "openable/io/atomic_file.h"
+#include "openable/io/staged_output.h"
 #include "openable/error.h"
-#include "openable/evaluation.h"
-#include "openable/image_source.h"
-#include "openable/loop_list.h"
-#include "openable/trajectory_export.h"
-#include "openable/trajectory_plot.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/io/image_source.h"
+#include "openable/evaluation/loop_list.h"
+#include "openable/view/trajectory_export.h"
+#include "openable/view/trajectory_plot.h"
 
 namespace
 {

@@ -1,7 +1,7 @@
 #pragma once
 
 #include "openable/config.h"
-#include "openable/loop_decision.h"
+#include "openable/detection/loop_decision.h"
 
 namespace openable_test
 {

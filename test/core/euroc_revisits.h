@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/geometric_verifier.h"
+#include "openable/verification/geometric_verifier.h"
 
 namespace openable_test
 {

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "openable/camera_calibration.h"
+#include "openable/verification/camera_calibration.h"
 #include "openable/error.h"
 #include "test_util.h"
 

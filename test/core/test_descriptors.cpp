@@ -8,12 +8,13 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 
-#include "openable/descriptor_implementations.h"
+#include "descriptors/descriptor_implementations.h"
+#include "openable/descriptors/descriptor_registry.h"
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/ldb.h"
-#include "openable/preprocessor.h"
-#include "openable/stereo.h"
+#include "openable/description/frame_describer.h"
+#include "openable/descriptors/ldb.h"
+#include "openable/description/preprocessor.h"
+#include "openable/description/stereo.h"
 #include "test_util.h"
 
 using namespace openable;
@@ -29,7 +30,8 @@ Config configFor(const std::string& name, int patch_size = 64)
   Config config;
   config.descriptor = name;
   config.patch_size = patch_size;
-  if (name == "D-LDB")
+  const DescriptorInfo* row = findDescriptor(name);
+  if (row && row->needs_disparity)
     config.camera_type = "stereo";
   return config;
 }
@@ -132,8 +134,60 @@ TEST(DescriptorFactory, BuildsEveryNameWithItsLength)
     const auto extractor = createDescriptorExtractor(config);
     ASSERT_TRUE(extractor) << name;
     EXPECT_EQ(extractor->name(), name);
-    EXPECT_EQ(extractor->isBinary(), config.isBinaryDescriptor()) << name;
+    EXPECT_EQ(extractor->isBinary(), descriptorInfo(name).binary()) << name;
     EXPECT_EQ(extractor->length(), lengths.at(name)) << name;
+  }
+}
+
+// Every row of the registry says what its extractor does: form, length, the smallest patch (built there,
+// refused below it), and the layout derived from the row alone equals the one FrameDescriber builds.
+TEST(DescriptorRegistry, EveryRowMatchesItsExtractor)
+{
+  ASSERT_FALSE(descriptorRegistry().empty());
+  for (const DescriptorInfo& row : descriptorRegistry())
+  {
+    SCOPED_TRACE(row.name);
+    const auto extractor = row.create(64);
+    ASSERT_TRUE(extractor);
+    EXPECT_EQ(extractor->name(), row.name);
+    EXPECT_EQ(extractor->isBinary(), row.binary());
+    EXPECT_EQ(extractor->length(), row.length);
+    EXPECT_EQ(extractor->minPatchSize(), row.min_patch_size);
+    EXPECT_TRUE(row.create(row.min_patch_size));
+    Config config = configFor(row.name);
+    EXPECT_EQ(descriptorLayout(config), FrameDescriber(config).layout());
+    config.patch_size = row.min_patch_size - 1;
+    try
+    {
+      createDescriptorExtractor(config);
+      ADD_FAILURE() << "patch_size " << config.patch_size << " was accepted";
+    }
+    catch (const Error& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("patch_size"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(findDescriptor("SUFR"), nullptr);
+  EXPECT_THROW(descriptorInfo("SUFR"), Error);
+  EXPECT_EQ(descriptorNames().size(), descriptorRegistry().size());
+}
+
+// Names and rules come from the rows: a descriptor that needs disparity is refused outside stereo by
+// validation, with the reason.
+TEST(DescriptorRegistry, ValidationFollowsTheRows)
+{
+  for (const DescriptorInfo& row : descriptorRegistry())
+  {
+    Config mono;
+    mono.descriptor = row.name;
+    const auto errors = mono.validate();
+    if (!row.needs_disparity)
+    {
+      EXPECT_TRUE(errors.empty()) << row.name;
+      continue;
+    }
+    ASSERT_EQ(errors.size(), 1u) << row.name;
+    EXPECT_NE(errors[0].find("needs camera_type stereo"), std::string::npos) << errors[0];
   }
 }
 
@@ -483,7 +537,8 @@ TEST(Hog, EqualsOpenCvsHogDescriptorBitForBit)
 TEST(HogB, IsHogAboveItsOwnLowerMedian)
 {
   const HogExtractor hog(128);
-  const HogBinaryExtractor hog_b(128);
+  const auto hog_b_extractor = descriptorInfo("HOG-B").create(128);
+  const DescriptorExtractor& hog_b = *hog_b_extractor;
   for (const auto& [traversal, frame] : std::vector<std::pair<std::string, int>>{
            {"day_left", 10}, {"day_right", 77}, {"night_right", 0}, {"night_right", 150}})
   {
@@ -517,9 +572,9 @@ TEST(HogB, IsPinned)
   for (int y = 0; y < 64; ++y)
     for (int x = 0; x < 64; ++x)
       synthetic.intensity.at<float>(y, x) = float(((x * 7 + y * 13) % 31) * 4 + (x * y) % 17 + 2 * x);
-  const uint64_t synthetic_print = fingerprint(describe(HogBinaryExtractor(64), synthetic).words);
+  const uint64_t synthetic_print = fingerprint(describe(*descriptorInfo("HOG-B").create(64), synthetic).words);
   const uint64_t real_print =
-      fingerprint(describe(HogBinaryExtractor(128), patchOf(gardensPoint("day_left", 10), 128)).words);
+      fingerprint(describe(*descriptorInfo("HOG-B").create(128), patchOf(gardensPoint("day_left", 10), 128)).words);
   std::printf("[ golden ] HOG-B fingerprints: synthetic 0x%016llx, day_left 10 0x%016llx\n",
               static_cast<unsigned long long>(synthetic_print), static_cast<unsigned long long>(real_print));
   EXPECT_EQ(synthetic_print, 0x003854793f580529ULL);

@@ -5,7 +5,7 @@
 #include <limits>
 #include <vector>
 
-#include "openable/distance_matrix_view.h"
+#include "openable/view/distance_matrix_view.h"
 #include "openable/error.h"
 
 using openable::DistanceMatrixView;

@@ -17,7 +17,7 @@
 
 #include "memory_limit.h"
 #include "openable/error.h"
-#include "openable/evaluation.h"
+#include "openable/evaluation/evaluation.h"
 
 namespace fs = std::filesystem;
 using openable::EvaluationResult;

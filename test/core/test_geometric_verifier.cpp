@@ -8,7 +8,7 @@
 
 #include "euroc_revisits.h"
 #include "openable/error.h"
-#include "openable/geometric_verifier.h"
+#include "openable/verification/geometric_verifier.h"
 
 namespace
 {
@@ -74,6 +74,12 @@ PoseError compare(const openable::Verification& v, const cv::Matx44d& truth)
       "errors: rotation %.3f deg, translation %.4f m, direction %.2f deg (|t| est %.3f m)\n",
       openable::toString(v.status), v.matches, v.inliers, v.rms_error_px, v.median_parallax_deg, angleDeg(rt),
       cv::norm(tt), e.rotation_deg, e.translation_m, e.direction_deg, cv::norm(v.translation));
+  // Quoted in doc/kitti.md per test (test/docs/check_doc_numbers.py compares the docs with these).
+  ::testing::Test::RecordProperty("inliers", v.inliers);
+  ::testing::Test::RecordProperty("rotation_deg", std::to_string(e.rotation_deg));
+  ::testing::Test::RecordProperty("translation_m", std::to_string(e.translation_m));
+  ::testing::Test::RecordProperty("direction_deg", std::to_string(e.direction_deg));
+  ::testing::Test::RecordProperty("true_translation_m", std::to_string(cv::norm(tt)));
   return e;
 }
 
@@ -166,10 +172,12 @@ TEST_F(EurocRevisits, NonRevisitRejected)
   EXPECT_NE(vs.reason.find("< " + std::to_string(openable::VerifierParams().min_inliers)), std::string::npos)
       << vs.reason;
   EXPECT_LE(vs.matches, 5);
+  RecordProperty("stereo_matches", vs.matches);
   openable::GeometricVerifier mono(monoOf(camera_));
   const auto vm = mono.verify(mono.extract(left_rect_[2]), mono.extract(left_rect_[0]));
   EXPECT_FALSE(vm.accepted());
   EXPECT_LE(vm.matches, 10);
+  RecordProperty("mono_matches", vm.matches);
   // Every other cross-place pair as well.
   for (const auto& p : {std::make_pair(1, 2), std::make_pair(1, 3), std::make_pair(3, 0)})
   {
@@ -205,6 +213,7 @@ TEST_F(EurocRevisits, MonoPureRotationRejected)
   const auto v = verifier.verify(verifier.extract(left_rect_[1]), verifier.extract(rotated));
   EXPECT_EQ(v.status, openable::VerificationStatus::PureRotation) << v.reason << " inliers " << v.inliers;
   EXPECT_LT(v.median_parallax_deg, 0.5);
+  RecordProperty("parallax_deg", std::to_string(v.median_parallax_deg));
   EXPECT_GT(v.inliers, 100);  // plenty of support: it is the geometry, not the matching, that is rejected
 }
 

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "openable/error.h"
-#include "openable/evaluation.h"
-#include "openable/ground_truth_sources.h"
-#include "openable/npy.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/evaluation/ground_truth_sources.h"
+#include "openable/io/npy.h"
 
 namespace fs = std::filesystem;
 using openable::GroundTruth;

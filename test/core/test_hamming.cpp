@@ -10,7 +10,7 @@
 
 #include "bit_oracle.h"
 #include "openable/error.h"
-#include "openable/hamming.h"
+#include "openable/hamming/hamming.h"
 
 using namespace openable;
 using openable_test::naiveBitCount;

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "openable/error.h"
-#include "openable/image_source.h"
+#include "openable/io/image_source.h"
 
 namespace
 {

@@ -11,13 +11,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "openable/frame_describer.h"
-#include "openable/image_source.h"
-#include "openable/input_contract.h"
-#include "openable/online_detector.h"
-#include "openable/place_server.h"
-#include "openable/pose_file.h"
-#include "openable/session_map.h"
+#include "openable/description/frame_describer.h"
+#include "openable/io/image_source.h"
+#include "openable/description/input_contract.h"
+#include "openable/detection/online_detector.h"
+#include "openable/server/place_server.h"
+#include "openable/io/pose_file.h"
+#include "openable/map/session_map.h"
 #include "test_util.h"
 
 using namespace openable;

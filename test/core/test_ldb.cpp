@@ -5,9 +5,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/hamming.h"
-#include "openable/ldb.h"
+#include "openable/description/frame_describer.h"
+#include "openable/hamming/hamming.h"
+#include "openable/descriptors/ldb.h"
 #include "test_util.h"
 
 using namespace openable;

@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <random>
 
-#include "openable/loop_decision.h"
+#include "openable/detection/loop_decision.h"
 
 using namespace openable;
 

@@ -2,8 +2,9 @@
 
 #include <cmath>
 
+#include "openable/description/frame_describer.h"
 #include "openable/error.h"
-#include "openable/loop_detector.h"
+#include "openable/detection/loop_detector.h"
 #include "acceptance_gate.h"
 #include "test_util.h"
 
@@ -107,7 +108,7 @@ TEST(LoopDetector, LocalisationModeMatchesAgainstAFixedMap)
   Config c = Config::paper();
   c.sequence_length = 3;
   std::mt19937_64 rng(6);
-  PlaceDatabase map(FrameDescriber(c).layout());
+  PlaceDatabase map(descriptorLayout(c));
   std::vector<FrameDescriptor> places;
   for (int i = 0; i < 30; ++i)
   {
@@ -174,7 +175,7 @@ TEST(LoopDetector, MinSequenceLengthLeavesPartialSequencesOut)
   c.sequence_length = 4;
   c.min_sequence_length = 0;  // only full sequences
   std::mt19937_64 rng(30);
-  PlaceDatabase map(FrameDescriber(c).layout());
+  PlaceDatabase map(descriptorLayout(c));
   std::vector<FrameDescriptor> places;
   for (int i = 0; i < 20; ++i)
   {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "openable/error.h"
-#include "openable/loop_list.h"
+#include "openable/evaluation/loop_list.h"
 
 namespace fs = std::filesystem;
 

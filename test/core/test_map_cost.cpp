@@ -12,8 +12,8 @@
 #include "crafted_maps.h"
 #include "memory_limit.h"
 #include "openable/error.h"
-#include "openable/place_server.h"
-#include "openable/session_map.h"
+#include "openable/server/place_server.h"
+#include "openable/map/session_map.h"
 
 using namespace openable;
 

@@ -13,8 +13,8 @@
 #include "memory_limit.h"
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/frame_metric.h"
-#include "openable/place_database.h"
+#include "openable/matching/frame_metric.h"
+#include "openable/map/place_database.h"
 
 using namespace openable;
 namespace fs = std::filesystem;

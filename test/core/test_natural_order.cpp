@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "openable/image_source.h"
-#include "openable/natural_order.h"
+#include "openable/io/image_source.h"
+#include "openable/io/natural_order.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;

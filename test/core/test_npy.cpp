@@ -11,7 +11,7 @@
 #include <string>
 
 #include "openable/error.h"
-#include "openable/npy.h"
+#include "openable/io/npy.h"
 
 namespace fs = std::filesystem;
 

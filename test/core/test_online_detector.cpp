@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "openable/error.h"
-#include "openable/online_detector.h"
+#include "openable/detection/online_detector.h"
 #include "test_util.h"
 
 using namespace openable;

@@ -10,9 +10,9 @@
 #include <random>
 
 #include "openable/error.h"
-#include "openable/loop_decision.h"
-#include "openable/online_detector.h"
-#include "openable/pace_matcher.h"
+#include "openable/detection/loop_decision.h"
+#include "openable/detection/online_detector.h"
+#include "openable/matching/pace_matcher.h"
 #include "test_util.h"
 
 using namespace openable;

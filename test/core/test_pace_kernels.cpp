@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <random>
 
-#include "openable/pace_matcher.h"
+#include "openable/matching/pace_matcher.h"
 
 using namespace openable;
 

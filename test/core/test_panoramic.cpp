@@ -5,8 +5,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "openable/frame_describer.h"
-#include "openable/loop_detector.h"
+#include "openable/description/frame_describer.h"
+#include "openable/detection/loop_detector.h"
 #include "test_util.h"
 
 using namespace openable;

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "openable/error.h"
-#include "openable/place_database.h"
+#include "openable/map/place_database.h"
 #include "test_util.h"
 
 using namespace openable;

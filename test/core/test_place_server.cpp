@@ -3,11 +3,11 @@
 // 2015), image NNN is the same place in every traversal.
 #include <gtest/gtest.h>
 
-#include "openable/answer_collector.h"
-#include "openable/candidate_merger.h"
-#include "openable/frame_describer.h"
-#include "openable/loop_detector.h"
-#include "openable/place_server.h"
+#include "openable/server/answer_collector.h"
+#include "openable/server/candidate_merger.h"
+#include "openable/description/frame_describer.h"
+#include "openable/detection/loop_detector.h"
+#include "openable/server/place_server.h"
 #include "test_util.h"
 
 using namespace openable;

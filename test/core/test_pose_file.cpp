@@ -7,7 +7,7 @@
 #include <fstream>
 
 #include "openable/error.h"
-#include "openable/pose_file.h"
+#include "openable/io/pose_file.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "openable/error.h"
-#include "openable/pose_graph.h"
+#include "openable/pose_graph/pose_graph.h"
 
 namespace
 {
@@ -210,6 +210,13 @@ TEST(PoseGraph, Kitti06LoopsCorrectDrift)
   const Result huber = solve(s, openable::RobustLoss::Huber, {});
   std::printf("ATE drifted %.3f m | corrected: least squares %.3f m, Cauchy %.3f m, Huber %.3f m (%s, %.3f s)\n",
               drifted, plain.ate, cauchy.ate, huber.ate, cauchy.summary.message.c_str(), cauchy.summary.seconds);
+  // Quoted in doc/kitti.md; test/docs/check_doc_numbers.py compares the docs with these.
+  RecordProperty("loops", int(s.loops.size()));
+  RecordProperty("ate_drifted_m", std::to_string(drifted));
+  RecordProperty("ate_least_squares_m", std::to_string(plain.ate));
+  RecordProperty("ate_cauchy_m", std::to_string(cauchy.ate));
+  RecordProperty("ate_huber_m", std::to_string(huber.ate));
+  RecordProperty("factor_cauchy", std::to_string(drifted / cauchy.ate));
   EXPECT_NEAR(drifted, 49.23, 0.01);  // the scenario itself (deterministic drift)
   EXPECT_TRUE(cauchy.summary.usable);
   EXPECT_LT(cauchy.summary.final_cost, cauchy.summary.initial_cost);
@@ -232,6 +239,15 @@ TEST(PoseGraph, WrongLoopsDoNotWreckTheGraph)
   const Result huber = solve(s, openable::RobustLoss::Huber, wrong);
   std::printf("with %zu wrong loops: ATE least squares %.3f m, Cauchy %.3f m (%.3f m without them), Huber %.3f m\n",
               wrong.size(), plain.ate, cauchy.ate, clean.ate, huber.ate);
+  // Quoted in doc/kitti.md; test/docs/check_doc_numbers.py compares the docs with these.
+  double heaviest_wrong = 0.0;
+  for (size_t i = s.loops.size(); i < cauchy.weights.size(); ++i)
+    heaviest_wrong = cauchy.weights[i] > heaviest_wrong ? cauchy.weights[i] : heaviest_wrong;
+  RecordProperty("wrong_loops", int(wrong.size()));
+  RecordProperty("ate_least_squares_m", std::to_string(plain.ate));
+  RecordProperty("ate_cauchy_m", std::to_string(cauchy.ate));
+  RecordProperty("ate_huber_m", std::to_string(huber.ate));
+  RecordProperty("heaviest_wrong_weight", std::to_string(heaviest_wrong));
   EXPECT_GT(plain.ate, 100.0);              // what the robust loss prevents
   EXPECT_LT(cauchy.ate, 1.02 * clean.ate);  // close to the graph without wrong loops
   EXPECT_LT(huber.ate, 8.5);

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "openable/pose_graph_builder.h"
+#include "openable/pose_graph/pose_graph_builder.h"
 
 using openable::LoopMeasurement;
 using openable::Matrix6d;

@@ -7,9 +7,9 @@
 #include <utility>
 #include <vector>
 
-#include "openable/area_downsample.h"
+#include "openable/description/area_downsample.h"
 #include "openable/error.h"
-#include "openable/preprocessor.h"
+#include "openable/description/preprocessor.h"
 #include "test_util.h"
 
 using namespace openable;

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "openable/error.h"
-#include "openable/ground_truth_sources.h"
-#include "openable/loop_csv.h"
-#include "openable/loop_list.h"
-#include "openable/published_scoring.h"
+#include "openable/evaluation/ground_truth_sources.h"
+#include "openable/detection/loop_csv.h"
+#include "openable/evaluation/loop_list.h"
+#include "openable/evaluation/published_scoring.h"
 
 namespace fs = std::filesystem;
 using openable::DecisionTable;

@@ -2,8 +2,8 @@
 // same place in every traversal.
 #include <gtest/gtest.h>
 
-#include "openable/frame_describer.h"
-#include "openable/loop_detector.h"
+#include "openable/description/frame_describer.h"
+#include "openable/detection/loop_detector.h"
 #include "test_util.h"
 
 using namespace openable;

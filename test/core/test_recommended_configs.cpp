@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "openable/config.h"
-#include "openable/frame_describer.h"
-#include "openable/loop_detector.h"
+#include "openable/description/frame_describer.h"
+#include "openable/detection/loop_detector.h"
 #include "test_util.h"
 
 using namespace openable;

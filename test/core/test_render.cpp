@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "openable/error.h"
-#include "openable/render.h"
+#include "openable/view/render.h"
 
 using namespace openable;
 

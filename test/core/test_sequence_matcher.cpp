@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "openable/error.h"
-#include "openable/frame_metric.h"
-#include "openable/hamming.h"
-#include "openable/sequence_matcher.h"
+#include "openable/matching/frame_metric.h"
+#include "openable/hamming/hamming.h"
+#include "openable/matching/sequence_matcher.h"
 #include "test_util.h"
 
 using namespace openable;

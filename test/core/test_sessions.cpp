@@ -7,10 +7,10 @@
 #include <fstream>
 
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/loop_detector.h"
-#include "openable/map_matcher.h"
-#include "openable/session_map.h"
+#include "openable/description/frame_describer.h"
+#include "openable/detection/loop_detector.h"
+#include "openable/detection/map_matcher.h"
+#include "openable/map/session_map.h"
 #include "acceptance_gate.h"
 #include "test_util.h"
 

@@ -14,9 +14,9 @@
 #include <map>
 #include <string>
 
-#include "openable/atomic_file.h"
+#include "openable/io/atomic_file.h"
 #include "openable/error.h"
-#include "openable/staged_output.h"
+#include "openable/io/staged_output.h"
 #include "output_set_files.h"
 
 namespace fs = std::filesystem;

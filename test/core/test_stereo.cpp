@@ -7,7 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
-#include "openable/stereo.h"
+#include "openable/description/stereo.h"
 #include "test_util.h"
 
 using namespace openable;

@@ -7,13 +7,13 @@
 
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/fix_history.h"
-#include "openable/frame_describer.h"
-#include "openable/reference_map.h"
-#include "openable/ring_sync.h"
-#include "openable/sequence_gaps.h"
-#include "openable/sync_watch.h"
-#include "openable/throttle.h"
+#include "openable/node_support/fix_history.h"
+#include "openable/description/frame_describer.h"
+#include "openable/map/reference_map.h"
+#include "openable/node_support/ring_sync.h"
+#include "openable/node_support/sequence_gaps.h"
+#include "openable/node_support/sync_watch.h"
+#include "openable/node_support/throttle.h"
 #include "test_util.h"
 
 using namespace openable;

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "openable/error.h"
-#include "openable/trajectory_export.h"
+#include "openable/view/trajectory_export.h"
 
 #ifndef PYTHON3_EXECUTABLE
 #error "PYTHON3_EXECUTABLE must be defined by the build"

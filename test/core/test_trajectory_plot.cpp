@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "openable/error.h"
-#include "openable/evaluation.h"
-#include "openable/loop_list.h"
-#include "openable/trajectory_plot.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/evaluation/loop_list.h"
+#include "openable/view/trajectory_plot.h"
 #include "test_util.h"
 
 using openable::LoopPair;

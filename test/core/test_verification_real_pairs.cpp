@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "euroc_revisits.h"
-#include "openable/camera_calibration.h"
-#include "openable/geometric_verifier.h"
+#include "openable/verification/camera_calibration.h"
+#include "openable/verification/geometric_verifier.h"
 #include "test_util.h"
 
 namespace

@@ -12,12 +12,12 @@
 
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/geometric_verifier.h"
-#include "openable/online_detector.h"
-#include "openable/place_database.h"
-#include "openable/reference_map.h"
-#include "openable/session_map.h"
+#include "openable/description/frame_describer.h"
+#include "openable/verification/geometric_verifier.h"
+#include "openable/detection/online_detector.h"
+#include "openable/map/place_database.h"
+#include "openable/map/reference_map.h"
+#include "openable/map/session_map.h"
 
 using namespace openable;
 

@@ -9,10 +9,10 @@
 
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/frame_describer.h"
-#include "openable/loop_detector.h"
-#include "openable/npy.h"
-#include "openable/session_map.h"
+#include "openable/description/frame_describer.h"
+#include "openable/detection/loop_detector.h"
+#include "openable/io/npy.h"
+#include "openable/map/session_map.h"
 
 namespace openable_fuzz
 {

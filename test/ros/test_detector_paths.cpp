@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/trajectory_export.h"
+#include "openable/view/trajectory_export.h"
 #include "test_helpers.h"
 
 using openable_ros_test::DiagnosticsWatcher;
@@ -312,6 +312,9 @@ TEST(DetectorPaths, FramesDroppedInTheQueueAreCountedFromSeqGaps)
       << diagnostics.number("frames dropped (queue)") << ", published " << frames + 1;
   std::printf("burst of %d frames into ~queue_size 1: %ld received, %ld dropped (queue)\n", frames + 1,
               diagnostics.number("frames received"), diagnostics.number("frames dropped (queue)"));
+  // Quoted in doc/ros_api.md; test/docs/check_doc_numbers.py compares (received and dropped vary by run).
+  RecordProperty("sent", frames + 1);
+  RecordProperty("accounted", std::to_string(accounted()));
   EXPECT_GT(diagnostics.number("frames dropped (queue)"), 0);
   EXPECT_LT(diagnostics.number("frames received"), frames + 1);
 }
@@ -368,6 +371,9 @@ TEST(DetectorPaths, FramesDroppedFromASeq0BagAreCountedFromStamps)
               "diagnostics level %d\n",
               frames, diagnostics.number("frames received"), diagnostics.number("frames dropped (queue)"),
               diagnostics.worstLevel());
+  // Quoted in doc/ros_api.md; test/docs/check_doc_numbers.py compares (received and dropped vary by run).
+  RecordProperty("sent", frames);
+  RecordProperty("accounted", std::to_string(accounted()));
   EXPECT_GT(diagnostics.number("frames dropped (queue)"), 0);
   EXPECT_GE(diagnostics.worstLevel(), int(diagnostic_msgs::DiagnosticStatus::WARN));
 }

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "openable/config.h"
-#include "openable/frame_describer.h"
-#include "openable/place_database.h"
+#include "openable/description/frame_describer.h"
+#include "openable/map/place_database.h"
 #include "test_helpers.h"
 
 using openable_ros_test::DiagnosticsWatcher;

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "openable/config.h"
-#include "openable/frame_describer.h"
-#include "openable/session_map.h"
+#include "openable/description/frame_describer.h"
+#include "openable/map/session_map.h"
 #include "test_helpers.h"
 
 using openable_ros_test::DiagnosticsWatcher;

@@ -172,6 +172,14 @@ TEST(MonoDetector, NightFramesCloseLoopsWithTheirDayTwins)
   std::printf("mono: %d of %d night frames closed a loop with their day twin (within 2), %d wrong, %d day loops; "
               "precision %.3f, recall %.3f\n",
               correct, frames, wrong, day_loops, precision, recall);
+  // Quoted in doc/ros_api.md; test/docs/check_doc_numbers.py compares the docs with these.
+  RecordProperty("correct", correct);
+  RecordProperty("night_frames", frames);
+  RecordProperty("wrong", wrong);
+  RecordProperty("day_loops", day_loops);
+  RecordProperty("published", published);
+  RecordProperty("precision", std::to_string(precision));
+  RecordProperty("recall", std::to_string(recall));
   EXPECT_GE(correct_fraction, min_correct);
   EXPECT_LE(wrong_fraction, max_wrong);
   EXPECT_EQ(day_loops, 0);

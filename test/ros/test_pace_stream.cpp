@@ -156,6 +156,14 @@ TEST(MonoDetectorPace, StandstillAndDoubleSpeedPublishOnlyRightLoops)
               "%zu of %d night images closed (recall %.3f)\n",
               odometry ? "odometry keyframes" : "images only", stream.size(), diagnostics.number("frames stored"),
               recorder.loops().size(), wrong, wrong_after_stop, closed.size(), night_images, recall);
+  // Quoted in doc/ros_api.md; test/docs/check_doc_numbers.py compares the docs with these.
+  RecordProperty("frames", int(stream.size()));
+  RecordProperty("stored", std::to_string(diagnostics.number("frames stored")));
+  RecordProperty("published", int(recorder.loops().size()));
+  RecordProperty("wrong", wrong);
+  RecordProperty("night_closed", int(closed.size()));
+  RecordProperty("night_images", night_images);
+  RecordProperty("recall", std::to_string(recall));
   EXPECT_EQ(wrong, 0);
   EXPECT_GE(recall, min_recall);
   EXPECT_GT(correct, 0);

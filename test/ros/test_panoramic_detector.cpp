@@ -168,6 +168,10 @@ TEST(PanoramicDetector, ReversedRevisitIsReportedWithDirectionMinusOne)
       "panoramic: %d of %d return-trip frames reported as reverse loops with the right place and shift; "
       "%d loops elsewhere\n",
       reverse_correct, kPlaces, other);
+  // Quoted in doc/ros_api.md; test/docs/check_doc_numbers.py compares the docs with these.
+  RecordProperty("reverse_correct", reverse_correct);
+  RecordProperty("return_frames", kPlaces);
+  RecordProperty("other_loops", other);
   EXPECT_GE(double(reverse_correct) / kPlaces, min_reverse_fraction);
   EXPECT_EQ(other, 0);
 }

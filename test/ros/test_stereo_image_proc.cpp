@@ -14,6 +14,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <stereo_msgs/DisparityImage.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <mutex>
@@ -187,6 +188,10 @@ TEST(StereoImageProc, DisparityOfStereoImageProcFeedsTheDetector)
   {
     std::printf("stereo_image_proc -> D-LDB: %s best matches %s, distance %.3f\n", nameOf(loop->header.stamp).c_str(),
                 nameOf(loop->match_stamp).c_str(), loop->distance);
+    // Quoted in doc/ros_api.md (e.g. distance.revisit_0); test/docs/check_doc_numbers.py compares.
+    std::string query_name = nameOf(loop->header.stamp);
+    std::replace(query_name.begin(), query_name.end(), ' ', '_');
+    RecordProperty("distance." + query_name, std::to_string(loop->distance));
   }
   EXPECT_EQ(nameOf(matchOf(7)), "revisit 1") << "pair 0 (a revisit 98 s later) did not find the place of pair 1";
   EXPECT_EQ(nameOf(matchOf(8)), "revisit 2") << "pair 3 did not find the place of pair 2";

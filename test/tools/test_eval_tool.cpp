@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "openable/evaluation.h"
-#include "openable/npy.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/io/npy.h"
 
 #ifndef OPENABLE_EVAL_BINARY
 #error "OPENABLE_EVAL_BINARY (path of the openable_eval executable) must be defined by the build"

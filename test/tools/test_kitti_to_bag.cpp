@@ -157,6 +157,9 @@ TEST_F(KittiToBag, Kitti07First160MonoHas160ImagesWithStampsAndCameraInfo)
     ++infos;
   }
   EXPECT_EQ(infos, 160u);
+  // Quoted in doc/kitti.md; test/docs/check_doc_numbers.py compares the docs with these.
+  RecordProperty("images", int(images));
+  RecordProperty("camera_infos", int(infos));
   EXPECT_EQ(bag.getSize() > 160u * 1226u * 370u, true);
 }
 

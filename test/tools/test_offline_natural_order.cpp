@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <string>
 
-#include "openable/npy.h"
+#include "openable/io/npy.h"
 #include "../core/test_util.h"
 
 #ifndef OPENABLE_OFFLINE_BINARY

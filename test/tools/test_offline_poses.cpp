@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "../core/test_util.h"
-#include "openable/npy.h"
+#include "openable/io/npy.h"
 #include "run_tool.h"
 
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "openable/npy.h"
+#include "openable/io/npy.h"
 #include "../core/test_util.h"
 #include "run_tool.h"
 

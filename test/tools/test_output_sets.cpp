@@ -23,8 +23,8 @@
 #include <string>
 #include <thread>
 
-#include "openable/npy.h"
-#include "openable/staged_output.h"
+#include "openable/io/npy.h"
+#include "openable/io/staged_output.h"
 #include "../core/output_set_files.h"
 #include "../core/test_util.h"
 

@@ -10,8 +10,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
-#include "openable/evaluation.h"
-#include "openable/trajectory_plot.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/view/trajectory_plot.h"
 #include "../core/test_util.h"
 
 #ifndef OPENABLE_TRAJECTORY_BINARY

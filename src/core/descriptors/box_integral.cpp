@@ -1,4 +1,4 @@
-#include "box_integral.h"
+#include "descriptors/box_integral.h"
 
 #include <algorithm>
 #include <cmath>

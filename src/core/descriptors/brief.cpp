@@ -2,9 +2,9 @@
 #include <cmath>
 #include <cstring>
 
-#include "openable/descriptor_implementations.h"
+#include "descriptors/descriptor_implementations.h"
 #include "openable/error.h"
-#include "patch_input.h"
+#include "descriptors/patch_input.h"
 
 namespace openable
 {

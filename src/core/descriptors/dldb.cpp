@@ -1,6 +1,6 @@
 #include <cstring>
 
-#include "openable/descriptor_implementations.h"
+#include "descriptors/descriptor_implementations.h"
 #include "openable/error.h"
 
 namespace openable

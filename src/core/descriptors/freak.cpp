@@ -3,10 +3,10 @@
 #include <cstring>
 #include <tuple>
 
-#include "box_integral.h"
-#include "openable/descriptor_implementations.h"
+#include "descriptors/box_integral.h"
+#include "descriptors/descriptor_implementations.h"
 #include "openable/error.h"
-#include "patch_input.h"
+#include "descriptors/patch_input.h"
 
 namespace openable
 {

@@ -3,9 +3,9 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/objdetect.hpp>
 
-#include "openable/descriptor_implementations.h"
+#include "descriptors/descriptor_implementations.h"
 #include "openable/error.h"
-#include "patch_input.h"
+#include "descriptors/patch_input.h"
 
 namespace openable
 {

@@ -1,4 +1,4 @@
-#include "openable/ldb.h"
+#include "openable/descriptors/ldb.h"
 
 #include <cmath>
 #include <cstring>

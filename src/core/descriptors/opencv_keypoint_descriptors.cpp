@@ -2,9 +2,9 @@
 #include <cstring>
 #include <opencv2/features2d.hpp>
 
-#include "openable/descriptor_implementations.h"
+#include "descriptors/descriptor_implementations.h"
 #include "openable/error.h"
-#include "patch_input.h"
+#include "descriptors/patch_input.h"
 
 namespace openable
 {

@@ -1,4 +1,4 @@
-#include "patch_input.h"
+#include "descriptors/patch_input.h"
 
 #include <cmath>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "evaluation_text.h"
+#include "evaluation/evaluation_text.h"
 
 #include <algorithm>
 #include <cmath>

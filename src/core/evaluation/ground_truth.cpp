@@ -12,10 +12,10 @@
 #include <sstream>
 #include <utility>
 
-#include "evaluation_text.h"
+#include "evaluation/evaluation_text.h"
 #include "openable/error.h"
-#include "openable/evaluation.h"
-#include "openable/kitti.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/io/kitti.h"
 
 namespace openable
 {

@@ -11,9 +11,9 @@
 #include <sstream>
 #include <utility>
 
-#include "evaluation_text.h"
+#include "evaluation/evaluation_text.h"
 #include "openable/error.h"
-#include "openable/evaluation.h"
+#include "openable/evaluation/evaluation.h"
 
 namespace openable
 {

@@ -11,11 +11,11 @@
 #include <sstream>
 #include <utility>
 
-#include "evaluation_text.h"
-#include "openable/atomic_file.h"
+#include "evaluation/evaluation_text.h"
+#include "openable/io/atomic_file.h"
 #include "openable/error.h"
-#include "openable/evaluation.h"
-#include "openable/image_source.h"
+#include "openable/evaluation/evaluation.h"
+#include "openable/io/image_source.h"
 
 namespace openable
 {

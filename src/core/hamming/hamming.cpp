@@ -1,10 +1,10 @@
 // The portable part of the Hamming kernels: the public API of openable/hamming.h, the plain C++ kernel every
 // CPU runs, and the run-time dispatch to the instruction-set kernels of this directory (hamming_kernels.h).
-#include "openable/hamming.h"
+#include "openable/hamming/hamming.h"
 
 #include <cmath>
 
-#include "hamming_kernels.h"
+#include "hamming/hamming_kernels.h"
 #include "openable/error.h"
 
 namespace openable

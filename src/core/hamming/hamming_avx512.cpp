@@ -9,7 +9,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "hamming_kernels.h"
+#include "hamming/hamming_kernels.h"
 
 namespace openable
 {

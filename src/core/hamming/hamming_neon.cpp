@@ -4,7 +4,7 @@
 
 #include <arm_neon.h>
 
-#include "hamming_kernels.h"
+#include "hamming/hamming_kernels.h"
 
 namespace openable
 {

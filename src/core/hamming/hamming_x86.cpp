@@ -5,7 +5,7 @@
 
 #include <immintrin.h>
 
-#include "hamming_kernels.h"
+#include "hamming/hamming_kernels.h"
 
 namespace openable
 {

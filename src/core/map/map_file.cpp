@@ -1,4 +1,4 @@
-#include "map_file.h"
+#include "map/map_file.h"
 
 #include <cmath>
 #include <cstring>
@@ -7,10 +7,10 @@
 #include <limits>
 #include <set>
 
-#include "openable/atomic_file.h"
+#include "openable/io/atomic_file.h"
 #include "openable/config.h"
 #include "openable/error.h"
-#include "openable/input_contract.h"
+#include "openable/description/input_contract.h"
 
 namespace fs = std::filesystem;
 

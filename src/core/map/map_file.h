@@ -3,8 +3,8 @@
 #include <string>
 #include <vector>
 
-#include "openable/place_database.h"
-#include "openable/session_map.h"
+#include "openable/map/place_database.h"
+#include "openable/map/session_map.h"
 
 namespace openable
 {

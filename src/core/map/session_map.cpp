@@ -1,8 +1,8 @@
-#include "openable/session_map.h"
+#include "openable/map/session_map.h"
 
 #include <algorithm>
 
-#include "map_file.h"
+#include "map/map_file.h"
 #include "openable/error.h"
 
 namespace openable

@@ -1,4 +1,4 @@
-#include "openable/pose_graph.h"
+#include "openable/pose_graph/pose_graph.h"
 
 #include <ceres/ceres.h>
 

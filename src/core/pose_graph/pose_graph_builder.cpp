@@ -1,4 +1,4 @@
-#include "openable/pose_graph_builder.h"
+#include "openable/pose_graph/pose_graph_builder.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "openable/answer_collector.h"
+#include "openable/server/answer_collector.h"
 
 #include <algorithm>
 

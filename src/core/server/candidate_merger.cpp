@@ -1,4 +1,4 @@
-#include "openable/candidate_merger.h"
+#include "openable/server/candidate_merger.h"
 
 #include <algorithm>
 

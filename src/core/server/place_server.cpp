@@ -1,9 +1,9 @@
-#include "openable/place_server.h"
+#include "openable/server/place_server.h"
 
 #include <algorithm>
 #include <sstream>
 
-#include "openable/frame_describer.h"
+#include "openable/description/frame_describer.h"
 
 namespace openable
 {
@@ -33,7 +33,7 @@ PlaceServer::PlaceServer(const Config& config, std::vector<std::string> owned, s
     owned_(std::move(owned)),
     name_(std::move(name)),
     hash_(descriptorHash(config)),
-    map_(FrameDescriber(config).layout(), config.toYaml())
+    map_(descriptorLayout(config), config.toYaml())
 {
 }
 

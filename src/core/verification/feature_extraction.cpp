@@ -7,7 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
-#include "openable/geometric_verifier.h"
+#include "openable/verification/geometric_verifier.h"
 
 namespace openable
 {

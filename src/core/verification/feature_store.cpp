@@ -2,7 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "openable/geometric_verifier.h"
+#include "openable/verification/geometric_verifier.h"
 
 namespace openable
 {

@@ -1,4 +1,4 @@
-#include "pose_covariance.h"
+#include "verification/pose_covariance.h"
 
 #include <algorithm>
 #include <cmath>

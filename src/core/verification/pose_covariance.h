@@ -6,7 +6,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "openable/geometric_verifier.h"
+#include "openable/verification/geometric_verifier.h"
 
 namespace openable
 {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "openable/geometric_verifier.h"
+#include "openable/verification/geometric_verifier.h"
 
 namespace openable
 {

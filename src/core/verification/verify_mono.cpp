@@ -4,9 +4,9 @@
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 
-#include "openable/geometric_verifier.h"
-#include "pose_covariance.h"
-#include "verification_util.h"
+#include "openable/verification/geometric_verifier.h"
+#include "verification/pose_covariance.h"
+#include "verification/verification_util.h"
 
 namespace openable
 {

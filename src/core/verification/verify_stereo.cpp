@@ -2,9 +2,9 @@
 // refined on the inliers: a metric T_match_query.
 #include <opencv2/calib3d.hpp>
 
-#include "openable/geometric_verifier.h"
-#include "pose_covariance.h"
-#include "verification_util.h"
+#include "openable/verification/geometric_verifier.h"
+#include "verification/pose_covariance.h"
+#include "verification/verification_util.h"
 
 namespace openable
 {

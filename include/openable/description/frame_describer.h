@@ -1,0 +1,59 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "openable/config.h"
+#include "openable/descriptors/descriptor_extractor.h"
+#include "openable/descriptors/descriptor_layout.h"
+#include "openable/description/preprocessor.h"
+
+namespace openable
+{
+/// The layout of a frame's descriptor under `config`, from the descriptor registry and the cell grid alone
+/// (no extractor is built). Throws Error when the configuration is invalid or the layout unsupported.
+DescriptorLayout descriptorLayout(const Config& config);
+
+/// The extractor named by config.descriptor, for its patch_size. Throws Error for an unknown name (listing
+/// the valid ones), for a descriptor that needs disparity outside stereo mode, or for a patch_size the
+/// extractor cannot use.
+std::unique_ptr<DescriptorExtractor> createDescriptorExtractor(const Config& config);
+
+/// Image -> patches -> descriptors, as the configuration says.
+class FrameDescriber
+{
+public:
+  /// Validates the config and builds the extractor. Throws Error.
+  explicit FrameDescriber(const Config& config);
+
+  const DescriptorLayout& layout() const
+  {
+    return layout_;
+  }
+  const Preprocessor& preprocessor() const
+  {
+    return preprocessor_;
+  }
+  const DescriptorExtractor& extractor() const
+  {
+    return *extractor_;
+  }
+
+  /// Describes patches as returned by the preprocessor (exactly layout().cells of them).
+  FrameDescriptor describe(const std::vector<Patch>& patches) const;
+  void describe(const std::vector<Patch>& patches, uint64_t* out) const;
+
+  /// Shorthand: preprocess + describe one mono or panoramic image.
+  FrameDescriptor describeImage(const cv::Mat& image) const;
+
+private:
+  Config config_;
+  Preprocessor preprocessor_;
+  DescriptorLayout layout_;
+  std::unique_ptr<DescriptorExtractor> extractor_;
+};
+
+}  // namespace openable

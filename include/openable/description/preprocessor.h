@@ -1,0 +1,68 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "openable/config.h"
+#include "openable/descriptors/descriptor_extractor.h"
+
+namespace openable
+{
+/// Paper Eq. 6 on a BGR (or BGRA) 8-bit image: I = log G - alpha log B - (1 - alpha) log R, as CV_32F.
+/// Zero-valued channels are treated as 1 (log 0 is undefined; 1 is the smallest positive 8-bit value),
+/// so a black pixel gives 0 and every other pixel gives exactly Eq. 6.
+cv::Mat illuminationInvariant(const cv::Mat& bgr, double alpha);
+
+/// Patch normalisation (as in SeqSLAM): every `block` x `block` block of a one-channel image is shifted and
+/// scaled to zero mean and unit standard deviation, so that local contrast, not absolute brightness, is
+/// described. Flat blocks become 0. block <= 0 returns the image unchanged.
+cv::Mat normalizeBlocks(const cv::Mat& image, int block);
+
+/// Turns a camera image into the patches to describe.
+///
+/// Input: 8-bit grey, BGR or BGRA, any size. The image is first reduced to one channel (grey, or Eq. 6
+/// when illumination_invariance is on, which needs colour input), then downsampled with area
+/// interpolation so that every cell becomes a patch_size x patch_size patch: global description gives one
+/// patch; grid description splits the image into grid_x x grid_y cells; panoramic images are split into
+/// `panoramas` vertical sub-panoramas (each of them split into the grid). Cells are returned row by row,
+/// sub-panorama by sub-panorama (sub-panorama-major). Patches are CV_32F.
+/// Cells across (grid columns, times the sub-panoramas) and down one image under `config`.
+int cellsAcross(const Config& config);
+int cellsDown(const Config& config);
+
+class Preprocessor
+{
+public:
+  explicit Preprocessor(const Config& config);
+
+  /// Cells across and down the whole image (panoramas * grid_x, grid_y).
+  int cellsAcross() const;
+  int cellsDown() const;
+  int cellCount() const
+  {
+    return cellsAcross() * cellsDown();
+  }
+
+  /// One-channel CV_32F image (grey 0..255, or Eq. 6). Throws Error on empty, wrong depth or channel count,
+  /// grey input with invariance on, or an image smaller than the cell layout.
+  cv::Mat intensity(const cv::Mat& image) const;
+
+  /// The patches of one image, in the order described above. Throws Error as intensity().
+  std::vector<Patch> patches(const cv::Mat& image) const;
+
+  /// The patches of one frame of a multi-camera ring (one image per sub-panorama, in ring order).
+  std::vector<Patch> patchesFromCameras(const std::vector<cv::Mat>& images) const;
+
+  /// Stereo: patches of the left image with the disparity (CV_32F pixels of the full-size image,
+  /// invalid <= 0 or non-finite) attached, scaled to the patch.
+  std::vector<Patch> patchesWithDisparity(const cv::Mat& left, const cv::Mat& disparity) const;
+
+  /// Throws Error naming what is wrong when `image` cannot be used as input.
+  void checkInput(const cv::Mat& image, const char* what = "image") const;
+
+private:
+  std::vector<Patch> split(const cv::Mat& intensity, const cv::Mat& disparity, int across) const;
+  Config config_;
+};
+
+}  // namespace openable

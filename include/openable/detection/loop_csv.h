@@ -1,0 +1,78 @@
+#pragma once
+
+#include <cstdint>
+#include <sstream>
+#include <string>
+
+#include "openable/detection/decision_table.h"
+#include "openable/detection/loop_decision.h"
+
+namespace openable
+{
+/// The one home of openable_offline's two decision files, written and read here only:
+/// - loop_closures.csv: one row per published loop closure,
+///   `query,match,distance,score,status[,direction,shift],query_session,match_session`
+///   (direction and shift with a panoramic camera);
+/// - decisions.csv: one row per frame, `query,match,distance,score,status,accepted,pace`
+///   (distance, score and pace `nan` when the frame had no candidate, match -1).
+/// Numbers are written with 6 significant digits.
+
+/// What the files say of one frame.
+struct LoopCsvFrame
+{
+  long query = 0;               ///< the stream's frame number
+  long match = -1;              ///< frame number of the best match; -1 when the frame had no candidate
+  bool has_candidates = false;  ///< false: distance, score and pace are written as nan
+  float distance = 0.0f;        ///< normalised distance of the best match
+  float score = 0.0f;           ///< the decision score (LoopDecision::score)
+  float pace = 1.0f;            ///< pace of the best match's sequence
+  FrameStatus status = FrameStatus::TooEarly;
+  int direction = 1;           ///< of the best match (panoramic files only)
+  int shift = 0;               ///< of the best match (panoramic files only)
+  uint32_t query_session = 0;  ///< session index of the query
+  uint32_t match_session = 0;  ///< session index of the best match
+};
+
+/// Collects the rows of both files, frame after frame; the caller writes the texts where it wants them.
+class LoopCsvWriter
+{
+public:
+  /// panoramic: loop_closures.csv gets the direction and shift columns.
+  explicit LoopCsvWriter(bool panoramic);
+
+  /// One frame: a row of decisions.csv, and of loop_closures.csv when it was published.
+  void add(const LoopCsvFrame& frame);
+
+  /// The text of loop_closures.csv so far, header included.
+  std::string loopClosures() const
+  {
+    return loops_.str();
+  }
+  /// The text of decisions.csv so far, header included.
+  std::string decisions() const
+  {
+    return decisions_.str();
+  }
+
+private:
+  bool panoramic_;
+  std::ostringstream loops_;
+  std::ostringstream decisions_;
+};
+
+/// Reads loop_closures.csv (`query,match,distance,score,status`, maybe more columns such as `direction,shift`)
+/// or decisions.csv (the same plus `accepted`). Columns are found by name in the header, so their order and
+/// extra columns do not matter. Throws Error naming the file, and the line where one is at fault: missing
+/// file, a missing column, a row with the wrong number of fields, a bad number, a status that is no
+/// FrameStatus word, accepted not 0/1, a published row without a match, or a loop_closures.csv row
+/// that is not published.
+DecisionTable loadDecisionTable(const std::string& path);
+
+/// True for the header line of a loop_closures.csv (it starts with `query,match`).
+bool isLoopCsvHeader(const std::string& line);
+
+/// The query and match of one loop_closures.csv row (further columns ignored): false unless its first two
+/// fields are frame indices >= 0.
+bool readLoopCsvPair(const std::string& line, int& query, int& match);
+
+}  // namespace openable

@@ -1,0 +1,83 @@
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+
+#include "openable/config.h"
+#include "openable/detection/map_matcher.h"
+
+namespace openable
+{
+/// What became of one frame: published, or the first reason it gave no loop closure.
+enum class FrameStatus
+{
+  Published,           ///< a loop closure went out
+  NotKeyframe,         ///< not stored: the camera has not moved enough since the last keyframe
+  Standstill,          ///< not stored: the image is the last stored one again (the camera stands still)
+  TimeJump,            ///< not stored: its stamp is earlier than the previous frame's
+  TooEarly,            ///< fewer than min_candidates full-sequence places to compare with
+  Excluded,            ///< history exists, but every frame of it is inside the exclusion (frames or seconds)
+  AboveThreshold,      ///< best normalised distance > threshold
+  NotUnique,           ///< uniqueness (1 - best / second best) < min_uniqueness, or no gate is set at all
+  Inconsistent,        ///< fewer than consistent_frames consecutive frames agree on where the loop is
+  FailedVerification,  ///< geometric verification rejected the candidate
+  Unverified,          ///< verification is required but could not run (no camera, no features)
+};
+
+/// The word used in outputs (loop_closures.csv, decisions.csv, LoopClosure.status): "published",
+/// "not_keyframe", "standstill", "time_jump", "too_early", "excluded", "above_threshold", "not_unique", "inconsistent",
+/// "failed_verification", "unverified".
+const char* toString(FrameStatus status);
+
+/// How unique a best match is, higher = surer: 1 - best / second best (0 when the second best is 0), 1
+/// without a rival. The one definition of uniqueness: MapMatcher and CandidateMerger fill
+/// Detection::uniqueness with it, LoopDecision gates and scores on it.
+float matchUniqueness(float best, std::optional<float> second_best);
+
+/// The part of the loop-closure decision that needs no images: the gates and temporal consistency.
+///
+/// Measured in loop-closure mode (one stream revisiting itself, doc/results.md): the false loops of a
+/// uniqueness gate alone come from the first traversal, where there is no loop at all, and almost all of
+/// them while only a few places can be compared (the "second best" then comes from a handful of frames,
+/// and a single candidate was even called unique). So a frame must have min_candidates places to choose
+/// from, pass every gate that is set, and agree with the consistent_frames - 1 frames before it: their
+/// best matches advance together, one place per frame within consistency_tolerance (a revisit at about
+/// the same speed, as sequence matching assumes anyway), step by step and over the whole run.
+class LoopDecision
+{
+public:
+  explicit LoopDecision(const Config& config);
+
+  /// Decides on one matched frame. Returns Published when every rule passes; verification comes after.
+  FrameStatus decide(const Detection& detection);
+  /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
+  /// candidates, or fewer than min_candidates: a lone candidate has no rival and would score 1).
+  float score(const Detection& detection) const;
+
+  /// Takes new values of the decision keys (threshold, min_uniqueness, min_candidates, consistent_frames,
+  /// consistency_tolerance); the consistency run restarts.
+  void setConfig(const Config& config);
+  /// Forgets the consistency run (a new stream, or a gap in it).
+  void reset();
+
+private:
+  bool gatesPass(const Detection& detection, FrameStatus& why) const;
+  bool advancesWithRun(const Detection& detection) const;
+  bool recentFramesFollowOneLine() const;
+  /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
+  bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
+
+  Config config_;
+  int run_ = 0;                   ///< consecutive frames (ending at the previous one) that passed and agree
+  bool published_ = false;        ///< the previous frame was published (its run is a loop)
+  double unique_distance_ = 0.0;  ///< distance of the last frame that passed the gates itself
+  uint64_t run_start_match_ = 0;  ///< best match of the run's first frame
+  uint64_t previous_match_ = 0;   ///< best match of the previous frame
+  int previous_direction_ = 1;
+  uint32_t previous_session_ = 0;
+  std::deque<uint64_t> recent_;  ///< the run's last consistent_frames matches
+};
+
+}  // namespace openable

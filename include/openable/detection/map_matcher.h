@@ -1,0 +1,106 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "openable/config.h"
+#include "openable/map/session_map.h"
+#include "openable/matching/row_matcher.h"
+#include "openable/matching/sequence_matcher.h"
+
+namespace openable
+{
+/// One matched reference frame.
+struct Candidate
+{
+  uint64_t id = 0;               ///< id of the reference frame (unique within its session)
+  uint32_t session = 0;          ///< the session it belongs to (index in the map)
+  size_t position = 0;           ///< its position in that session's frames (0 = oldest stored)
+  float distance = 1.0f;         ///< normalised sequence distance in [0, 1], 0 = identical
+  int8_t direction = 1;          ///< +1 same direction, -1 reverse (bidirectional matching)
+  int16_t shift = 0;             ///< circular shift of sub-panoramas that matched best (panoramic)
+  uint16_t sequence_length = 0;  ///< terms in the sequence (L, or fewer at the start of a chain)
+  float pace = 1.0f;  ///< places of the reference per query frame along the sequence (1: the first pass's pace)
+};
+
+/// The outcome of one frame.
+struct Detection
+{
+  uint64_t query_id = 0;
+  bool has_candidates = false;  ///< false while nothing can be compared yet (start, exclusion window)
+  bool excluded = false;        ///< no candidates although frames are stored: all inside the exclusion
+  bool own_excluded = false;    ///< the query's own session holds frames, all of them inside the exclusion
+  size_t candidates = 0;        ///< reference frames compared with a sequence long enough to be a candidate
+  Candidate best;
+  std::vector<Candidate> top;  ///< up to top_k distinct places, best first
+  /// matchUniqueness (loop_decision.h) of the best and the second best place (outside uniqueness_window).
+  /// Whether the frame passes the gates is LoopDecision's to say.
+  float uniqueness = 0.0f;
+};
+
+/// Detection::excluded: no candidate, the query's own past is stored but all of it inside the exclusion
+/// (Detection::own_excluded), and no other session holds a frame (`other_frames`).
+bool onlyExcludedPast(const Detection& detection, size_t other_frames);
+
+/// Matches one stream of query frames against every session of a map it does not own: one SequenceMatcher
+/// per session, so a sequence never spans two sessions. The stream's own session (when its frames are
+/// stored in the map) is matched except its last `exclusion_window` frames and those stamped less than
+/// `exclusion_seconds` before the query; other sessions are matched whole. The best places of all
+/// sessions compete: the second best that makes a match unique may come from any session.
+///
+/// Sequences: in loop-closure use (`partial_sequences` false) only full sequences of L frames are
+/// candidates: the partial chains at the start of a stream compare a few frames only and were the main
+/// source of false loops (measured, doc/results.md); localisation accepts min_sequence_length terms,
+/// because there every query has a true match.
+class MapMatcher
+{
+public:
+  MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences);
+
+  /// Matches the next query frame. own_session is the session the stream stores its frames in (-1: none).
+  /// The map may have gained sessions or frames, or lost its oldest frames, since the last call.
+  Detection match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp);
+
+  /// The last query's normalised distance to every frame of the map, sessions one after another in map
+  /// order, each by position; NaN where no comparison was made.
+  void lastRow(const SessionMap& map, std::vector<float>& out) const;
+
+  /// New matching keys (sequence_length and bidirectional restart every sequence). The caller validates.
+  void setConfig(const Config& config);
+  /// Forgets the query stream.
+  void reset();
+
+  int sequenceLength() const
+  {
+    return config_.sequence_length;
+  }
+
+private:
+  /// The own-session exclusion, here only: the positions [0, result) of `frames` a query stamped `stamp`
+  /// may be compared with (all of them when the session is not the query's own).
+  size_t candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const;
+  /// The candidate in `column` of `session`'s matcher.
+  Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;
+  int minTerms() const;
+
+  Config config_;
+  bool partial_sequences_;
+  FrameMetric metric_;
+  /// A session's matcher: sequences at any pace (PaceMatcher), or at the first pass's pace (max_pace 1).
+  std::unique_ptr<RowMatcher> makeMatcher(const DescriptorLayout& layout) const;
+
+  std::vector<std::unique_ptr<RowMatcher>> matchers_;  ///< one per session of the map, in map order
+  FrameDescriptor last_query_;
+  /// One session's candidate column and its distance.
+  struct Pick
+  {
+    float distance;
+    uint32_t session;
+    size_t column;
+  };
+  std::vector<size_t> taken_;  ///< scratch: one session's best distinct columns
+  std::vector<Pick> picks_;    ///< scratch: every session's, then the best of them
+};
+
+}  // namespace openable

@@ -1,0 +1,180 @@
+#pragma once
+
+#include <array>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "openable/config.h"
+#include "openable/description/frame_describer.h"
+#include "openable/matching/frame_metric.h"
+#include "openable/geo_position.h"
+#include "openable/verification/geometric_verifier.h"
+#include "openable/detection/loop_decision.h"
+#include "openable/detection/loop_detector.h"
+
+namespace openable
+{
+/// One synchronised input set, already converted from messages or files. Which images are used depends on
+/// camera_type and descriptor (see OnlineDetector::describe).
+struct FrameInput
+{
+  cv::Mat image;                 ///< mono image, left rectified image (stereo) or panorama
+  cv::Mat right;                 ///< stereo: right rectified image (D-LDB computes the disparity with SGBM)
+  cv::Mat disparity;             ///< stereo: a disparity image instead of `right` (stereo_msgs: 32FC1, < 0 invalid)
+  std::vector<cv::Mat> cameras;  ///< panoramic ring: one image per camera, in ring order (instead of `image`)
+  double stamp = 0.0;            ///< seconds; 0 = unknown (no time checks, no exclusion_seconds)
+  uint32_t session = 0;  ///< localising: the session reported for the query (stored frames take their map session)
+  std::string source;  ///< file name or topic: stored with the frame, used in messages
+  bool has_pose = false;
+  std::array<double, 7> pose{{0, 0, 0, 0, 0, 0, 1}};  ///< x y z qx qy qz qw in a fixed frame
+  /// Where the frame was taken (e.g. the detector nodelets' ~fix). The pipeline does not use it and the map
+  /// does not store it: the caller keeps it by the outcome's frame id (geoPositionsCsvLine), for the KML
+  /// export (openable_trajectory --geo).
+  bool has_geo = false;
+  GeoPosition geo;
+};
+
+/// What the pipeline does besides the configuration's keys (the nodelets' ROS parameters map onto it).
+struct OnlineOptions
+{
+  double keyframe_distance = 0.0;  ///< metres the camera must move before a frame is stored (0 = every frame)
+  double keyframe_angle = 0.0;     ///< radians the camera must turn before a frame is stored (0 = off)
+  bool verify = false;             ///< geometric verification of candidates (needs setCamera())
+  bool verify_required = true;     ///< true: a candidate that cannot be verified is not published (Unverified)
+                                   ///< (the verifier's tunables are the configuration's verify_* keys)
+  size_t feature_bytes = 256u << 20;  ///< memory bound of the features kept for verification
+  /// Every frame must carry a stamp (the nodelets: a ROS header stamp of 0 is unset). Without it a stream
+  /// whose first frame is stamped 0 has no stamps (a folder of images); stamped streams refuse 0 anyway.
+  bool require_stamps = false;
+};
+
+/// Wall time of each stage of one frame (milliseconds).
+struct StageTimes
+{
+  double preprocess_ms = 0.0;
+  double describe_ms = 0.0;
+  double match_ms = 0.0;  ///< match and decide
+  double verify_ms = 0.0;
+};
+
+/// The outcome of one frame.
+struct FrameOutcome
+{
+  FrameStatus status = FrameStatus::TooEarly;
+  bool stored = false;  ///< added to the history (loop-closure mode) / matched (localisation)
+  FrameInfo query;      ///< the frame as stored (its id and session are set)
+  Detection detection;  ///< candidates, uniqueness, ...
+  float score = 0.0f;   ///< decision score, higher = surer (LoopDecision::score)
+  bool has_match_info = false;
+  FrameInfo match;        ///< the best match's stored info (with its session), when it is still in the map
+  bool verified = false;  ///< `verification` holds an accepted relative pose
+  Verification verification;
+  std::string verification_note;  ///< why verification did not run or failed (empty when verified)
+  StageTimes times;
+
+  bool published() const
+  {
+    return status == FrameStatus::Published;
+  }
+};
+
+/// The one online pipeline: describe -> keyframe -> match -> decide -> verify. The nodelets and
+/// openable_offline both call it, so the offline tool lists exactly what a nodelet publishes.
+///
+/// Loop-closure mode (first constructor) matches every frame against the stream's own past and stores it;
+/// localisation mode matches against a fixed reference map. Not thread-safe: callers serialise.
+class OnlineDetector
+{
+public:
+  /// Throws Error when the configuration or options are invalid.
+  explicit OnlineDetector(const Config& config, const OnlineOptions& options = OnlineOptions());
+  /// Localisation against a saved or built map. Throws Error when the map is empty or built with another
+  /// descriptor configuration.
+  OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options = OnlineOptions());
+  /// A saved map of one or more sessions, localised against (MapMode::Localise) or continued as the new
+  /// session `session` (MapMode::Continue: loops within the new session and with every earlier one).
+  /// Throws Error when the map is empty (localising), was built with another layout, or already holds a
+  /// session of that name.
+  OnlineDetector(const Config& config, SessionMap map, MapMode mode, SessionInfo session,
+                 const OnlineOptions& options = OnlineOptions());
+
+  /// Describes, stores, matches and decides. Bad images throw Error / cv::Exception before anything is
+  /// stored, so a caller can report and carry on; what the input contract refuses (input_contract.h: a
+  /// non-finite, negative or 0 stamp in a stamped stream, a non-finite pose or non-unit quaternion, an image
+  /// below kMinImageSide a side, a constant frame) throws FrameRefused with its reason. A stamp before the
+  /// previous one is not thrown: it comes back as FrameStatus::TimeJump (a caller may reset on it).
+  FrameOutcome process(const FrameInput& input);
+
+  /// The input's descriptor as the configuration says: stereo D-LDB from `disparity` or from the pair
+  /// (SGBM), a ring from `cameras`, otherwise `image`. Throws Error naming what is missing, FrameRefused for
+  /// an image too small or a constant frame.
+  FrameDescriptor describe(const FrameInput& input) const;
+
+  /// The camera for verification (rectified intrinsics; a baseline makes it stereo). The first valid one
+  /// is kept; returns false (and keeps the first) when another is given. Throws Error when invalid.
+  bool setCamera(const PinholeCamera& camera);
+  bool hasVerifier() const
+  {
+    return verifier_ != nullptr;
+  }
+  const GeometricVerifier* verifier() const
+  {
+    return verifier_.get();
+  }
+
+  /// New values of the keys that can change live (LoopDetector::updateMatching plus the decision keys).
+  /// Throws Error, changing nothing, when a verify_* key differs (the verifier is built once, in setCamera).
+  void updateConfig(const Config& config);
+  /// Forgets the stream (and, in loop-closure mode, the history and stored features).
+  void reset();
+
+  const Config& config() const
+  {
+    return config_;
+  }
+  const OnlineOptions& options() const
+  {
+    return options_;
+  }
+  const FrameDescriber& describer() const
+  {
+    return describer_;
+  }
+  const LoopDetector& loopDetector() const
+  {
+    return detector_;
+  }
+  bool localisationMode() const
+  {
+    return detector_.localisationMode();
+  }
+
+private:
+  std::vector<Patch> patches(const FrameInput& input) const;
+  /// patches() of a frame that may become a place: refuses a constant frame (FrameRefused).
+  std::vector<Patch> placePatches(const FrameInput& input) const;
+  bool isKeyframe(const FrameInput& input);
+  /// The camera stands still: the frame is textured and its descriptor within standstill_distance of the last
+  /// stored frame's (a textureless frame, e.g. a tunnel, says nothing about motion and is matched as usual).
+  bool standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
+  void verify(const FrameInput& input, FrameOutcome& outcome);
+
+  Config config_;
+  OnlineOptions options_;
+  FrameDescriber describer_;
+  LoopDetector detector_;
+  LoopDecision decision_;
+  FrameMetric metric_;
+  bool has_last_stored_ = false;
+  FrameDescriptor last_stored_;  ///< the last stored frame's descriptor (standstill)
+  FrameOutcome last_outcome_;    ///< and its outcome: a frame standing still repeats it
+  std::unique_ptr<GeometricVerifier> verifier_;
+  FeatureStore features_;
+  double last_stamp_ = 0.0;
+  bool has_keyframe_pose_ = false;
+  std::array<double, 7> keyframe_pose_{{0, 0, 0, 0, 0, 0, 1}};
+};
+
+}  // namespace openable

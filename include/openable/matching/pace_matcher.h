@@ -1,0 +1,187 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <new>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "openable/matching/frame_metric.h"
+#include "openable/matching/row_matcher.h"
+
+namespace openable
+{
+/// Sequence matching at any pace: the revisit may advance from 1 / max_pace to max_pace places of the
+/// reference per query frame, and change pace along the way (an online Viterbi over places and paces, after
+/// Hansen & Browning, ICRA 2014, in min-plus form, with SeqSLAM's straight trajectories as its states).
+///
+/// Each place j and pace v (17 slopes from 1/3 to 3 for max_pace 3, in steps of 15 %, plus one beyond each end) keeps the
+/// cost of the best path of query frames ending in j at that pace, an exponentially weighted mean of frame
+/// distances along it with a memory of L frames (a = 1 - 1/L):
+///   C_t[j, v] = (1 - a) * d(t, j) + a * min(C_{t-1}[j - s, v], M_{t-1}[j - s] + pace_penalty),
+///   M_t[j] = min_v C_t[j, v]
+/// where s = floor((t + 1) v) - floor(t v) is the places that pace advances at frame t (a straight line, as
+/// SeqSLAM searches), d the normalised frame distance (0 = identical, 1 = every bit different), and M_t[j]
+/// the place's cost at its best pace: a path keeps its pace for free and changes it for `pace_penalty`, so a
+/// revisit that speeds up or slows down is followed, while a path cannot zig-zag through the row picking the
+/// smallest distance of every frame (which would make every place look alike). With `bidirectional`, the
+/// reverse (places visited backwards: j + s) is kept the same way. One pass over the descriptors per frame,
+/// whatever L and max_pace are, fused with one pass over the costs, chunk by chunk (the chunk's distances stay
+/// in L1): the costs are 16-bit fixed point (1.0 = 32767, products rounded, sums saturated), 2 bytes a place and
+/// pace, so a frame moves 48 + 17 x 4 bytes a place rather than 48 + 17 x 8, and a vector holds 16 or 32 places.
+/// The rounding moves a cost by at most about 3 L units of 1 / 32767 from the float recurrence (test_pace checks
+/// it); every kernel (portable, AVX2, AVX-512BW, chosen at run time) computes the same integers (test_pace_kernels).
+///
+/// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
+/// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
+///
+/// The kernels of a frame's update; each one gives the same numbers (kBest: the fastest this CPU runs).
+enum class PaceKernel
+{
+  kBest,
+  kPortable,
+  kAvx2,
+  kAvx512
+};
+std::string paceKernelName(PaceKernel kernel);
+/// Kernels this CPU runs, slowest first (kBest not among them).
+std::vector<PaceKernel> supportedPaceKernels();
+
+/// Storage on 64-byte boundaries: the kernels' vectors then load and store whole cache lines.
+template <typename T>
+struct CacheAligned
+{
+  using value_type = T;
+  CacheAligned() = default;
+  template <typename U>
+  CacheAligned(const CacheAligned<U>&)
+  {
+  }
+  T* allocate(size_t n)
+  {
+    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(64)));
+  }
+  void deallocate(T* p, size_t)
+  {
+    ::operator delete(p, std::align_val_t(64));
+  }
+  bool operator==(const CacheAligned&) const
+  {
+    return true;
+  }
+  bool operator!=(const CacheAligned&) const
+  {
+    return false;
+  }
+};
+using AlignedCosts = std::vector<int16_t, CacheAligned<int16_t>>;
+
+/// How PaceMatcher follows a revisit (Config's max_pace, pace_penalty, pace_tolerance).
+struct PaceOptions
+{
+  int max_pace = 3;        ///< paces from 1 / max_pace to max_pace places per frame
+  float penalty = 3.0f;    ///< a change of pace, in standard deviations of a path's cost under noise
+  int tolerance = 1;       ///< places a path may be off its line in each frame (0 .. 2)
+  PaceKernel kernel = PaceKernel::kBest;  ///< tests and benchmarks pick one; Error when the CPU lacks it
+};
+
+class PaceMatcher : public RowMatcher
+{
+public:
+  /// Throws Error when sequence_length < 1 or an option is out of range.
+  PaceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional, const PaceOptions& options);
+
+  void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates) override;
+  uint64_t firstId() const override
+  {
+    return first_id_;
+  }
+  size_t columns() const override
+  {
+    return columns_;
+  }
+  float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const override;
+  uint16_t terms(size_t column, int direction) const override;
+  float pace(size_t column) const override
+  {
+    const auto& slope = slopes_[paceIndex(column)];
+    return static_cast<float>(std::abs(slope.first)) / static_cast<float>(slope.second);
+  }
+  size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
+  void setSequenceLength(int sequence_length) override;
+  void setBidirectional(bool bidirectional) override;
+  void reset() override;
+
+  int maxPace() const
+  {
+    return max_pace_;
+  }
+  /// The paces followed, as fractions (places, frames): slowest first, then the reverse ones with bidirectional.
+  const std::vector<std::pair<int, int>>& paces() const
+  {
+    return slopes_;
+  }
+  /// Query frames matched since the last reset.
+  uint64_t queries() const
+  {
+    return queries_;
+  }
+
+private:
+  /// Keeps the rows aligned with the reference: drops evicted places, appends new ones at `prior`.
+  void align(const PlaceDatabase& reference, size_t candidates);
+  /// raw_ for the chunk of columns [begin, begin + m), with tolerance_ neighbours on each side.
+  void distances(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m);
+  /// Keeps a buffer of costs aligned: drops `front` evicted places, keeps `size` places, new ones at `prior`.
+  void resizeCosts(AlignedCosts& costs, size_t front, size_t size);
+  /// The costs of pace `pace` over chunk `chunk` of a buffer, at place 0 of the chunk.
+  int16_t* segment(AlignedCosts& costs, size_t chunk, size_t pace) const
+  {
+    return costs.data() + (chunk * slopes_.size() + pace) * segment_ + margin_;
+  }
+  /// The buffer that holds a pace's costs of the last frame.
+  AlignedCosts& current(size_t pace);
+  const AlignedCosts& current(size_t pace) const;
+  /// The smallest normalized() of chunk `chunk`, leaving out columns within `window` of a taken one.
+  float chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const;
+  float value(size_t column, int* direction) const;
+  /// The index in slopes_ of the pace of the column's best path (the first of the smallest costs).
+  size_t paceIndex(size_t column) const;
+
+  FrameMetric metric_;
+  int sequence_length_;
+  int max_pace_;
+  bool bidirectional_;
+  float step_penalty_;
+  int tolerance_;
+  PaceKernel kernel_;
+  std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
+  float keep_ = 0.0f;  ///< a = 1 - 1/L, the weight of the path so far
+  uint64_t queries_ = 0;
+  uint64_t evidence_ = 0;  ///< query frames that had places to match since the last reset
+  uint64_t first_id_ = 0;
+  float spread_ = 0.0f;  ///< the previous row's standard deviation of frame distances
+  int16_t prior_ = 0;    ///< the previous row's mean frame distance: the start of a place that joins the row
+  /// C[j, v]: per chunk of kChunk places, per pace, a segment of pad_ places, the chunk's places and pad_ more
+  /// (paces read up to pad_ places beyond the chunk; the padding holds copies of those).
+  AlignedCosts costs_;
+  AlignedCosts reverse_;  ///< with bidirectional: reverse paces read one buffer and write the other
+  bool flipped_ = false;          ///< the reverse paces' last costs are in reverse_
+  size_t pad_ = 4;  ///< more places than any pace advances in a frame
+  size_t margin_ = 32;  ///< pad_ rounded up to whole vectors: every segment's places start on a cache line
+  size_t segment_ = 0;  ///< kChunk + 2 margin_
+  std::vector<int16_t> best_;      ///< M[j] at pad_ + j: the smallest of a place's costs, judged by its own distance
+  std::vector<int16_t> old_best_;  ///< the previous frame's M, while match() runs
+  size_t columns_ = 0;
+  std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
+  // Scratch for one chunk of columns.
+  std::vector<uint32_t> raw_;     ///< frame distances
+  AlignedCosts entry_;    ///< the entry terms of the kernel
+  AlignedCosts extra_;
+  AlignedCosts smallest_;
+  AlignedCosts with_change_;
+};
+
+}  // namespace openable

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# What kitti.launch gives on a short bag (doc/kitti.md, "A short bag"): the first 160 frames of KITTI 07
+# (../shared/data/kitti/07_first160: left grey camera, no poses, no loop inside them) converted by
+# kitti_to_bag, played through kitti.launch with the mono detector (verification on; no tf, no pose graph,
+# no rviz: the bag has no poses). Prints the decisions by status and the loop closures.
+# Usage: kitti_short_bag.sh CATKIN_WORKSPACE [more kitti.launch args, e.g. exclusion_window:=20]
+set -o pipefail  # no -u: ROS setup scripts read unset variables
+ws=${1:?usage: kitti_short_bag.sh CATKIN_WORKSPACE [kitti.launch args...]}
+shift
+root=$(cd "$(dirname "$0")/.." && pwd)
+data=${KITTI_07_FIRST160:-$root/../shared/data/kitti/07_first160}
+bag=$root/build/kitti07_first160.bag
+export PATH=/usr/bin:/bin:$PATH ROS_HOME=$root/build/ros_home ROS_LOG_DIR=$root/build/ros_home/log
+# shellcheck disable=SC1091
+source "$ws/devel/setup.bash"
+[ -f "$bag" ] || rosrun openable_ros kitti_to_bag --sequence "$data" --output "$bag" --quiet || exit 1
+port=$((12000 + RANDOM % 1000))
+export ROS_MASTER_URI=http://127.0.0.1:$port
+pids=()
+cleanup() { for pid in "${pids[@]}"; do kill -INT "$pid" 2> /dev/null; done; wait 2> /dev/null; }
+trap cleanup EXIT
+roscore -p "$port" > /dev/null 2>&1 & pids+=($!)
+sleep 3
+echo "roslaunch openable_ros kitti.launch bag:=$bag stereo:=false fixed_frame:=none pose_graph:=false rviz:=false $*"
+roslaunch openable_ros kitti.launch bag:="$bag" stereo:=false fixed_frame:=none pose_graph:=false rviz:=false \
+  delay:=5 "$@" > "$root/build/kitti_short_bag.log" 2>&1 & pids+=($!)
+ROS_NAMESPACE=kitti /usr/bin/python3 "$root/scripts/count_decisions.py" _idle:=8 _timeout:=120

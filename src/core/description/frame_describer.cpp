@@ -1,0 +1,90 @@
+#include "openable/description/frame_describer.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "openable/descriptors/descriptor_registry.h"
+#include "openable/error.h"
+
+namespace openable
+{
+DescriptorLayout descriptorLayout(const Config& config)
+{
+  config.validateOrThrow();
+  const DescriptorInfo& row = descriptorInfo(config.descriptor);
+  DescriptorLayout layout;
+  layout.binary = row.binary();
+  layout.cell_length = row.length;
+  layout.cell_words = layout.binary ? wordsForBits(layout.cell_length) : (layout.cell_length + 1) / 2;
+  layout.cells = cellsAcross(config) * cellsDown(config);
+  layout.blocks = config.camera() == CameraType::Panoramic ? config.panoramas : 1;
+  const std::string problem = layout.check();
+  if (!problem.empty())
+    throw Error("the configuration gives an unsupported descriptor " + problem);
+  return layout;
+}
+
+std::unique_ptr<DescriptorExtractor> createDescriptorExtractor(const Config& config)
+{
+  const DescriptorInfo& row = descriptorInfo(config.descriptor);
+  if (row.needs_disparity && config.camera() != CameraType::Stereo)
+    throw Error("descriptor " + config.descriptor + " describes disparity and needs camera_type stereo (got " +
+                config.camera_type + ")");
+  if (config.patch_size < row.min_patch_size)
+    throw Error("patch_size " + std::to_string(config.patch_size) + " is too small for " + row.name +
+                "; expected at least " + std::to_string(row.min_patch_size));
+  return row.create(config.patch_size);
+}
+
+FrameDescriber::FrameDescriber(const Config& config)
+  : config_(config), preprocessor_(config), layout_(descriptorLayout(config)), extractor_(createDescriptorExtractor(config))
+{
+  // The registry's row and the extractor it builds must agree (test_descriptors checks every row).
+  if (extractor_->isBinary() != layout_.binary || extractor_->length() != layout_.cell_length)
+    throw Error("descriptor " + config.descriptor + ": its registry row does not match its extractor");
+}
+
+FrameDescriptor FrameDescriber::describe(const std::vector<Patch>& patches) const
+{
+  FrameDescriptor out(layout_.frameWords());
+  describe(patches, out.data());
+  return out;
+}
+
+void FrameDescriber::describe(const std::vector<Patch>& patches, uint64_t* out) const
+{
+  if (static_cast<int>(patches.size()) != layout_.cells)
+    throw Error("got " + std::to_string(patches.size()) + " patches; the configuration describes " +
+                std::to_string(layout_.cells) + " cells per frame");
+  std::memset(out, 0, sizeof(uint64_t) * layout_.frameWords());
+  std::vector<float> values;
+  for (int i = 0; i < layout_.cells; ++i)
+  {
+    uint64_t* cell = out + i * layout_.cell_words;
+    if (layout_.binary)
+    {
+      extractor_->describeBinary(patches[i], cell);
+      continue;
+    }
+    values.assign(layout_.cell_words * 2, 0.0f);
+    extractor_->describeFloat(patches[i], values.data());
+    // Unit length: L2 distances then lie in [0, 2] whatever the descriptor's own scale, so they can be
+    // normalised and summed like Hamming distances. An all-zero vector (a flat patch) stays zero.
+    double norm = 0.0;
+    for (float v : values)
+      norm += double(v) * v;
+    norm = std::sqrt(norm);
+    if (norm > 0.0)
+      for (float& v : values)
+        v = static_cast<float>(v / norm);
+    std::memcpy(cell, values.data(), sizeof(float) * values.size());
+  }
+}
+
+FrameDescriptor FrameDescriber::describeImage(const cv::Mat& image) const
+{
+  return describe(preprocessor_.patches(image));
+}
+
+}  // namespace openable

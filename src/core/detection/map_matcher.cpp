@@ -1,0 +1,189 @@
+#include "openable/detection/map_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "openable/error.h"
+#include "openable/detection/loop_decision.h"
+#include "openable/matching/pace_matcher.h"
+
+namespace openable
+{
+bool onlyExcludedPast(const Detection& detection, size_t other_frames)
+{
+  return detection.top.empty() && detection.own_excluded && other_frames == 0;
+}
+
+MapMatcher::MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences)
+  : config_(config), partial_sequences_(partial_sequences), metric_(layout)
+{
+}
+
+std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layout) const
+{
+  if (config_.max_pace <= 1)
+    return std::make_unique<SequenceMatcher>(layout, config_.sequence_length, config_.bidirectional);
+  PaceOptions pace;
+  pace.max_pace = config_.max_pace;
+  pace.penalty = static_cast<float>(config_.pace_penalty);
+  pace.tolerance = config_.pace_tolerance;
+  return std::make_unique<PaceMatcher>(layout, config_.sequence_length, config_.bidirectional, pace);
+}
+
+int MapMatcher::minTerms() const
+{
+  if (!partial_sequences_ || config_.min_sequence_length == 0)
+    return config_.sequence_length;
+  return config_.min_sequence_length;
+}
+
+size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const
+{
+  if (!own)
+    return frames.size();
+  const size_t excluded = static_cast<size_t>(config_.exclusion_window);
+  size_t columns = frames.size() > excluded ? frames.size() - excluded : 0;
+  if (config_.exclusion_seconds > 0.0 && stamp > 0.0)
+  {
+    // Stamps grow along a session (the caller refuses time jumps): the first position stamped too
+    // recently, by binary search.
+    const double newest_allowed = stamp - config_.exclusion_seconds;
+    size_t low = 0, high = columns;
+    while (low < high)
+    {
+      const size_t middle = low + (high - low) / 2;
+      if (frames.stamp(middle) > newest_allowed)
+        high = middle;
+      else
+        low = middle + 1;
+    }
+    columns = low;
+  }
+  return columns;
+}
+
+Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_t column) const
+{
+  const RowMatcher& matcher = *matchers_[session];
+  const PlaceDatabase& frames = map.frames(session);
+  Candidate c;
+  int direction = 1;
+  c.distance = matcher.normalized(column, &direction, minTerms());
+  c.sequence_length = matcher.terms(column, direction);
+  c.pace = matcher.pace(column);
+  c.direction = static_cast<int8_t>(direction);
+  c.session = session;
+  c.id = matcher.firstId() + column;
+  c.position = static_cast<size_t>(c.id - frames.firstId());
+  if (frames.layout().blocks > 1)
+  {
+    int shift = 0;
+    metric_.distance(last_query_.data(), frames.descriptor(c.position), &shift);
+    c.shift = static_cast<int16_t>(shift);
+  }
+  return c;
+}
+
+Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp)
+{
+  if (query.size() != map.layout().frameWords())
+    throw Error("descriptor of " + std::to_string(query.size()) + " words does not fit the map's " +
+                std::to_string(map.layout().frameWords()) + " words");
+  last_query_ = query;
+  while (matchers_.size() < map.sessionCount())
+    matchers_.push_back(makeMatcher(map.layout()));
+
+  // Top-k distinct places: each session's own (its matcher answers from what it summarised while
+  // matching: no pass over a row of N floats), then the best of them all. A uniqueness window never
+  // reaches into another session, so this picks exactly what one scan of all sessions' rows would.
+  Detection detection;
+  const size_t wanted = static_cast<size_t>(std::max(config_.top_k, 2));
+  const size_t window = static_cast<size_t>(std::max(0, config_.uniqueness_window));
+  std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
+  picks.clear();
+  for (uint32_t s = 0; s < map.sessionCount(); ++s)
+  {
+    const bool own = static_cast<int>(s) == own_session;
+    const PlaceDatabase& frames = map.frames(s);
+    const size_t columns = candidateColumns(frames, own, stamp);
+    detection.own_excluded = detection.own_excluded || (own && columns == 0 && !frames.empty());
+    RowMatcher& matcher = *matchers_[s];
+    matcher.match(query.data(), frames, columns);
+    detection.candidates += matcher.smallestDistinct(wanted, window, minTerms(), taken_);
+    for (size_t column : taken_)
+      picks.push_back({matcher.normalized(column, nullptr, minTerms()), s, column});
+  }
+  // By distance; ties to the earlier session, then the lower column (as one scan would).
+  std::stable_sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance < b.distance; });
+  if (picks.size() > wanted)
+    picks.resize(wanted);
+  for (size_t i = 0; i < picks.size() && i < static_cast<size_t>(config_.top_k); ++i)
+    detection.top.push_back(candidateAt(map, picks[i].session, picks[i].column));
+
+  // No candidate although the stream's own past exists and nothing else is in the map: the exclusion.
+  const size_t other_frames = detection.own_excluded
+                                  ? map.frameCount() - map.frames(static_cast<uint32_t>(own_session)).size()
+                                  : map.frameCount();
+  detection.excluded = onlyExcludedPast(detection, other_frames);
+  if (!detection.top.empty())
+  {
+    detection.has_candidates = true;
+    detection.best = detection.top.front();
+    detection.uniqueness = matchUniqueness(
+        detection.best.distance, picks.size() < 2 ? std::nullopt : std::optional<float>(picks[1].distance));
+  }
+  return detection;
+}
+
+void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
+{
+  out.clear();
+  for (uint32_t s = 0; s < map.sessionCount(); ++s)
+  {
+    const PlaceDatabase& frames = map.frames(s);
+    const size_t start = out.size();
+    out.resize(start + frames.size(), std::nanf(""));
+    if (s >= matchers_.size())
+      continue;
+    const RowMatcher& matcher = *matchers_[s];
+    for (size_t c = 0; c < matcher.columns(); ++c)
+    {
+      const uint64_t id = matcher.firstId() + c;
+      if (id < frames.firstId())
+        continue;  // evicted after matching
+      const size_t position = static_cast<size_t>(id - frames.firstId());
+      if (position < frames.size())
+        out[start + position] = matcher.normalized(c, nullptr, minTerms());
+    }
+  }
+}
+
+void MapMatcher::setConfig(const Config& config)
+{
+  const bool new_kind = (config.max_pace <= 1) != (config_.max_pace <= 1) || config.max_pace != config_.max_pace ||
+                        config.pace_penalty != config_.pace_penalty ||
+                        config.pace_tolerance != config_.pace_tolerance;
+  if (new_kind)
+  {
+    config_ = config;
+    for (auto& matcher : matchers_)
+      matcher = makeMatcher(metric_.layout());
+    return;
+  }
+  for (auto& matcher : matchers_)
+  {
+    if (config.sequence_length != config_.sequence_length)
+      matcher->setSequenceLength(config.sequence_length);
+    if (config.bidirectional != config_.bidirectional)
+      matcher->setBidirectional(config.bidirectional);
+  }
+  config_ = config;
+}
+
+void MapMatcher::reset()
+{
+  for (auto& matcher : matchers_)
+    matcher->reset();
+}
+
+}  // namespace openable

@@ -1,0 +1,39 @@
+#include "openable/detection/map_replay.h"
+
+#include "openable/detection/loop_detector.h"
+
+namespace openable
+{
+std::vector<MapLoop> replayLoops(const SessionMap& map, const Config& config)
+{
+  // Unbounded: a session replayed must keep every frame it holds, so positions stay those of the map.
+  Config replay = config;
+  replay.max_history = 0;
+  std::vector<MapLoop> loops;
+  SessionMap grown(map.layout(), map.configYaml());
+  for (uint32_t s = 0; s < map.sessionCount(); ++s)
+  {
+    LoopDetector detector(replay, grown, MapMode::Continue, map.session(s));
+    LoopDecision decision(replay);
+    const PlaceDatabase& frames = map.frames(s);
+    for (size_t p = 0; p < frames.size(); ++p)
+    {
+      const FrameDescriptor query(frames.descriptor(p), frames.descriptor(p) + frames.layout().frameWords());
+      const Detection d = detector.process(query, frames.info(p));
+      if (decision.decide(d) != FrameStatus::Published)
+        continue;
+      MapLoop loop;
+      loop.query_session = s;
+      loop.query_id = frames.firstId() + p;
+      loop.match_session = d.best.session;
+      loop.match_id = map.frames(d.best.session).firstId() + d.best.position;
+      loop.distance = d.best.distance;
+      loop.score = decision.score(d);
+      loops.push_back(loop);
+    }
+    grown = detector.map();
+  }
+  return loops;
+}
+
+}  // namespace openable

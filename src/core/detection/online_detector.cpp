@@ -1,0 +1,361 @@
+#include "openable/detection/online_detector.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "openable/descriptors/descriptor_registry.h"
+#include "openable/error.h"
+#include "openable/description/input_contract.h"
+#include "openable/description/stereo.h"
+
+namespace openable
+{
+namespace
+{
+void checkOptions(const OnlineOptions& options)
+{
+  if (!std::isfinite(options.keyframe_distance) || options.keyframe_distance < 0.0)
+    throw Error("keyframe_distance: value " + std::to_string(options.keyframe_distance) +
+                " is not allowed; expected metres >= 0 (0 = every frame)");
+  if (!std::isfinite(options.keyframe_angle) || options.keyframe_angle < 0.0)
+    throw Error("keyframe_angle: value " + std::to_string(options.keyframe_angle) +
+                " is not allowed; expected radians >= 0 (0 = off)");
+}
+
+double millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+PlaceDatabase nonEmpty(PlaceDatabase map)
+{
+  if (map.empty())
+    throw Error("the reference map holds no frame; expected a map with at least one place");
+  return map;
+}
+
+SessionMap nonEmptyWhenLocalising(SessionMap map, MapMode mode)
+{
+  if (mode == MapMode::Localise && map.frameCount() == 0)
+    throw Error("the reference map holds no frame; expected a map with at least one place");
+  return map;
+}
+
+/// Angle (radians) between two orientations given as quaternions (x y z w at indices 3..6).
+double rotationBetween(const std::array<double, 7>& a, const std::array<double, 7>& b)
+{
+  double dot = 0.0, na = 0.0, nb = 0.0;
+  for (int i = 3; i < 7; ++i)
+  {
+    dot += a[i] * b[i];
+    na += a[i] * a[i];
+    nb += b[i] * b[i];
+  }
+  if (na <= 0.0 || nb <= 0.0)
+    return 0.0;
+  const double c = std::min(1.0, std::fabs(dot) / std::sqrt(na * nb));
+  return 2.0 * std::acos(c);
+}
+}  // namespace
+
+OnlineDetector::OnlineDetector(const Config& config, const OnlineOptions& options)
+  : config_(config),
+    options_(options),
+    describer_(config),
+    detector_(config),
+    decision_(config),
+    metric_(describer_.layout()),
+    features_(options.feature_bytes)
+{
+  checkOptions(options);
+}
+
+OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options)
+  : config_(config),
+    options_(options),
+    describer_(config),
+    detector_(config, nonEmpty(std::move(reference_map))),
+    decision_(config),
+    metric_(describer_.layout()),
+    features_(options.feature_bytes)
+{
+  checkOptions(options);
+}
+
+OnlineDetector::OnlineDetector(const Config& config, SessionMap map, MapMode mode, SessionInfo session,
+                               const OnlineOptions& options)
+  : config_(config),
+    options_(options),
+    describer_(config),
+    detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, std::move(session)),
+    decision_(config),
+    metric_(describer_.layout()),
+    features_(options.feature_bytes)
+{
+  checkOptions(options);
+}
+
+std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
+{
+  const Preprocessor& pre = describer_.preprocessor();
+  if (config_.camera() == CameraType::Panoramic && !input.cameras.empty())
+  {
+    for (size_t i = 0; i < input.cameras.size(); ++i)
+    {
+      const InputProblem size = checkImageSize(input.cameras[i].cols, input.cameras[i].rows);
+      if (!size.ok() && !input.cameras[i].empty())
+        throw FrameRefused(size.reason, "camera " + std::to_string(i) + " of the ring: " + size.what);
+    }
+    return pre.patchesFromCameras(input.cameras);
+  }
+  if (input.image.empty())
+    throw Error("empty image; expected an 8-bit grey, BGR or BGRA image");
+  const InputProblem size = checkImageSize(input.image.cols, input.image.rows);
+  if (!size.ok())
+    throw FrameRefused(size.reason, size.what);
+  if (!descriptorInfo(config_.descriptor).needs_disparity)
+    return pre.patches(input.image);  // stereo with a mono descriptor: the left image only, no SGBM cost
+  if (!input.disparity.empty())
+    return pre.patchesWithDisparity(input.image, disparityFromImage(input.disparity));
+  if (input.right.empty())
+    throw Error("descriptor " + config_.descriptor + " needs the right image or a disparity image besides the left one");
+  return pre.patchesWithDisparity(input.image, disparityFromPair(input.image, input.right, config_));
+}
+
+std::vector<Patch> OnlineDetector::placePatches(const FrameInput& input) const
+{
+  std::vector<Patch> cells = patches(input);
+  const InputProblem texture = checkTexture(cells, config_.illumination_invariance);
+  if (!texture.ok())
+    throw FrameRefused(texture.reason, texture.what);
+  return cells;
+}
+
+FrameDescriptor OnlineDetector::describe(const FrameInput& input) const
+{
+  return describer_.describe(placePatches(input));
+}
+
+bool OnlineDetector::isKeyframe(const FrameInput& input)
+{
+  if (options_.keyframe_distance <= 0.0 && options_.keyframe_angle <= 0.0)
+    return true;
+  // Without a pose the motion is unknown: keeping the frame loses nothing, skipping it could.
+  if (!input.has_pose)
+    return true;
+  if (!has_keyframe_pose_)
+  {
+    has_keyframe_pose_ = true;
+    keyframe_pose_ = input.pose;
+    return true;
+  }
+  const double dx = input.pose[0] - keyframe_pose_[0];
+  const double dy = input.pose[1] - keyframe_pose_[1];
+  const double dz = input.pose[2] - keyframe_pose_[2];
+  const bool moved =
+      (options_.keyframe_distance > 0.0 && std::sqrt(dx * dx + dy * dy + dz * dz) >= options_.keyframe_distance) ||
+      (options_.keyframe_angle > 0.0 && rotationBetween(keyframe_pose_, input.pose) >= options_.keyframe_angle);
+  if (moved)
+    keyframe_pose_ = input.pose;
+  return moved;
+}
+
+bool OnlineDetector::standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const
+{
+  if (config_.standstill_distance <= 0.0 || !has_last_stored_ || last_stored_.size() != descriptor.size())
+    return false;
+  const double distance = static_cast<double>(metric_.distance(descriptor.data(), last_stored_.data())) /
+                          static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
+  if (distance > config_.standstill_distance)
+    return false;
+  // A black tunnel frame is the same descriptor at any speed (kMinTextureStdDev). The illumination-invariant
+  // image has another scale: not tested there.
+  return config_.illumination_invariance || textured(cells, kMinTextureStdDev);
+}
+
+FrameOutcome OnlineDetector::process(const FrameInput& original)
+{
+  // The input contract (input_contract.h): bad stamps and poses are refused before anything changes.
+  const InputProblem stamp = checkStamp(original.stamp, last_stamp_, last_stamp_ > 0.0, options_.require_stamps);
+  if (stamp.reason == "stamp went backwards")
+  {
+    FrameOutcome jumped;
+    jumped.query.stamp = original.stamp;
+    jumped.query.session = original.session;
+    jumped.query.source = original.source;
+    jumped.status = FrameStatus::TimeJump;
+    return jumped;
+  }
+  if (!stamp.ok())
+    throw FrameRefused(stamp.reason, stamp.what);
+  FrameInput input_copy;
+  const FrameInput* checked = &original;
+  if (original.has_pose)
+  {
+    Pose pose = original.pose;
+    const InputProblem problem = checkPose(pose);
+    if (!problem.ok())
+      throw FrameRefused(problem.reason, problem.what);
+    if (pose != original.pose)
+    {
+      input_copy = original;  // cv::Mat copies share their pixels
+      input_copy.pose = pose;
+      checked = &input_copy;
+    }
+  }
+  const FrameInput& input = *checked;
+  FrameOutcome outcome;
+  outcome.query.stamp = input.stamp;
+  outcome.query.session = input.session;
+  outcome.query.source = input.source;
+  outcome.query.has_pose = input.has_pose;
+  outcome.query.pose = input.pose;
+  if (!isKeyframe(input))
+  {
+    outcome.status = FrameStatus::NotKeyframe;
+    return outcome;
+  }
+  // Bad input throws here, before anything is stored.
+  auto start = std::chrono::steady_clock::now();
+  const std::vector<Patch> cells = placePatches(input);
+  outcome.times.preprocess_ms = millisecondsSince(start);
+  start = std::chrono::steady_clock::now();
+  const FrameDescriptor descriptor = describer_.describe(cells);
+  outcome.times.describe_ms = millisecondsSince(start);
+  if (input.stamp > 0.0)
+    last_stamp_ = input.stamp;
+  if (standsStill(descriptor, cells))
+  {
+    // The same place as the last stored frame: it adds no place and no step to the sequences (a stop must
+    // neither grow the history nor become a "revisit" of itself), and it repeats that frame's loop closure.
+    FrameOutcome repeated = last_outcome_;
+    repeated.stored = false;
+    repeated.query.stamp = input.stamp;
+    repeated.query.source = input.source;
+    repeated.query.has_pose = input.has_pose;
+    repeated.query.pose = input.pose;
+    repeated.times = outcome.times;
+    if (!repeated.published())
+      repeated.status = FrameStatus::Standstill;
+    return repeated;
+  }
+
+  start = std::chrono::steady_clock::now();
+  outcome.detection = detector_.process(descriptor, outcome.query);
+  outcome.stored = true;
+  outcome.query.id = outcome.detection.query_id;
+  if (!detector_.localisationMode())
+    outcome.query.session = static_cast<uint32_t>(detector_.ownSession());
+  outcome.status = decision_.decide(outcome.detection);
+  outcome.score = decision_.score(outcome.detection);
+  if (outcome.detection.has_candidates)
+  {
+    const PlaceDatabase& frames = detector_.map().frames(outcome.detection.best.session);
+    const uint64_t id = outcome.detection.best.id;
+    // Looked up by id: storing the query may have evicted the oldest frames.
+    if (id >= frames.firstId() && id - frames.firstId() < frames.size())
+    {
+      outcome.has_match_info = true;
+      outcome.match = frames.info(static_cast<size_t>(id - frames.firstId()));
+    }
+  }
+  outcome.times.match_ms = millisecondsSince(start);
+  start = std::chrono::steady_clock::now();
+  verify(input, outcome);
+  outcome.times.verify_ms = millisecondsSince(start);
+  has_last_stored_ = true;
+  last_stored_ = descriptor;
+  last_outcome_ = outcome;
+  return outcome;
+}
+
+void OnlineDetector::verify(const FrameInput& input, FrameOutcome& outcome)
+{
+  if (!options_.verify)
+    return;
+  // Every stored frame keeps its features: later frames may close a loop with it.
+  std::unique_ptr<FrameFeatures> query;
+  if (verifier_ && !input.image.empty())
+  {
+    try
+    {
+      const cv::Mat right = verifier_->camera().stereo() ? input.right : cv::Mat();
+      query = std::make_unique<FrameFeatures>(verifier_->extract(input.image, right, outcome.query.id));
+    }
+    catch (const Error& e)
+    {
+      outcome.verification_note = std::string("no features: ") + e.what();
+    }
+    catch (const cv::Exception& e)
+    {
+      outcome.verification_note = std::string("no features (OpenCV): ") + e.what();
+    }
+  }
+  if (outcome.published())
+  {
+    const FrameFeatures* match = features_.find(outcome.detection.best.id);
+    if (!verifier_)
+      outcome.verification_note = "no camera yet";
+    else if (!query)
+    {
+      if (outcome.verification_note.empty())  // else it already says why extraction failed
+        outcome.verification_note = "no query features";
+    }
+    else if (!match)
+      outcome.verification_note = "match frame has no features (it came before the camera, or was evicted)";
+    else
+    {
+      outcome.verification = verifier_->verify(*match, *query);
+      outcome.verified = outcome.verification.accepted();
+      outcome.verification_note =
+          outcome.verified ? ""
+                           : std::string(toString(outcome.verification.status)) +
+                                 (outcome.verification.reason.empty() ? "" : " (" + outcome.verification.reason + ")");
+      if (!outcome.verified)
+        outcome.status = FrameStatus::FailedVerification;
+    }
+    // A required verification never lets an unverified candidate through.
+    if (!outcome.verified && outcome.published() && options_.verify_required)
+      outcome.status = FrameStatus::Unverified;
+  }
+  if (query && !detector_.localisationMode())
+    features_.insert(std::move(*query));
+}
+
+bool OnlineDetector::setCamera(const PinholeCamera& camera)
+{
+  if (verifier_)
+  {
+    const PinholeCamera& c = verifier_->camera();
+    return c.fx == camera.fx && c.fy == camera.fy && c.cx == camera.cx && c.cy == camera.cy &&
+           c.baseline == camera.baseline && c.image_size == camera.image_size;
+  }
+  verifier_ = std::make_unique<GeometricVerifier>(camera, verifierParams(config_));
+  return true;
+}
+
+void OnlineDetector::updateConfig(const Config& config)
+{
+  // The verifier keeps the verify_* values it was built with; accepting others would make config() lie.
+  std::string changed;
+  for (const auto& key : Config::keys())
+    if (key.name.rfind("verify_", 0) == 0 && config.get(key.name) != config_.get(key.name))
+      changed += (changed.empty() ? "" : ", ") + key.name;
+  if (!changed.empty())
+    throw Error("cannot change " + changed + " while running: the verifier is built once; restart the detector");
+  detector_.updateMatching(config);  // validates and refuses descriptor keys
+  decision_.setConfig(config);
+  config_ = config;
+}
+
+void OnlineDetector::reset()
+{
+  detector_.reset();
+  decision_.reset();
+  features_.clear();
+  last_stamp_ = 0.0;
+  has_keyframe_pose_ = false;
+  has_last_stored_ = false;
+}
+
+}  // namespace openable

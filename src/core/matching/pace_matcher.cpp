@@ -1,0 +1,415 @@
+#include "openable/matching/pace_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "openable/error.h"
+#include "pace_kernels.h"
+
+namespace openable
+{
+namespace
+{
+/// Columns processed together: a chunk's distances and scratch stay in L1/L2, its costs are one run of memory
+/// of 17 x 4 KB (256 columns: a frame at 1e7 places took 73 ms, 1024: 54, 2048: 55, 4096: 54, while 1e5 places
+/// slowed down past 2048), and each chunk gets one minimum for smallestDistinct().
+constexpr size_t kChunk = 2048;
+/// The cost of a path that does not exist (before the first place): never the minimum, never overflows.
+constexpr float kNoPath = 1e30f;
+
+/// The paces of max_pace as fractions p / 60 (places per frame), slowest first: from 1 / max_pace to max_pace
+/// in steps of a factor kPaceStep, 1 exactly among them. Between two neighbours a straight line drifts by one
+/// place in about 1 / (pace * (kPaceStep - 1)) frames.
+constexpr double kPaceStep = 1.15;
+std::vector<std::pair<int, int>> slopesFor(int max_pace)
+{
+  const int steps = static_cast<int>(std::ceil(std::log(static_cast<double>(max_pace)) / std::log(kPaceStep)));
+  std::vector<std::pair<int, int>> slopes;
+  const auto add = [&slopes](double pace)
+  {
+    const int p = std::max(1, static_cast<int>(std::lround(pace * 60.0)));
+    if (slopes.empty() || slopes.back().first != p)
+      slopes.emplace_back(p, 60);
+  };
+  for (int k = -steps; k <= steps; ++k)
+    add(std::min<double>(max_pace, std::max(1.0 / max_pace, std::pow(kPaceStep, k))));
+  return slopes;
+}
+
+/// A cost of the kernels as a normalised distance.
+float costOf(int16_t cost)
+{
+  return static_cast<float>(cost) / static_cast<float>(pace_kernels::kOne);
+}
+
+/// Places a pace of p / q advances at frame t: the straight line's position floor(t p / q), differenced.
+int stepAt(uint64_t t, int p, int q)
+{
+  return static_cast<int>((t + 1) * static_cast<uint64_t>(p) / static_cast<uint64_t>(q) -
+                          t * static_cast<uint64_t>(p) / static_cast<uint64_t>(q));
+}
+}  // namespace
+
+PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional,
+                         const PaceOptions& options)
+  : metric_(layout),
+    sequence_length_(1),
+    max_pace_(options.max_pace),
+    bidirectional_(bidirectional),
+    step_penalty_(options.penalty),
+    tolerance_(options.tolerance),
+    kernel_(options.kernel)
+{
+  if (max_pace_ < 1 || max_pace_ > 64)
+    throw Error("max_pace " + std::to_string(max_pace_) + " is out of range; expected 1..64 places per frame");
+  if (!std::isfinite(step_penalty_) || step_penalty_ < 0.0f)
+    throw Error("pace_penalty must be finite and >= 0");
+  if (tolerance_ < 0 || tolerance_ > 2)
+    throw Error("pace_tolerance " + std::to_string(tolerance_) + " is out of range; expected 0..2 places");
+  pace_kernels::kernelFor(kernel_);  // throws now rather than at the first frame
+  setSequenceLength(sequence_length);
+  raw_.resize(kChunk + 2 * static_cast<size_t>(tolerance_));
+  entry_.resize(kChunk);
+  extra_.resize(kChunk);
+  smallest_.resize(kChunk);
+}
+
+void PaceMatcher::setSequenceLength(int sequence_length)
+{
+  if (sequence_length < 1 || sequence_length > std::numeric_limits<uint16_t>::max())
+    throw Error("sequence_length " + std::to_string(sequence_length) + " is out of range; expected 1..65535");
+  sequence_length_ = sequence_length;
+  keep_ = 1.0f - 1.0f / static_cast<float>(sequence_length);
+  reset();
+}
+
+void PaceMatcher::setBidirectional(bool bidirectional)
+{
+  bidirectional_ = bidirectional;
+  reset();
+}
+
+void PaceMatcher::reset()
+{
+  slopes_ = slopesFor(max_pace_);
+  if (bidirectional_)
+  {
+    const size_t forward = slopes_.size();
+    for (size_t v = 0; v < forward; ++v)
+      slopes_.emplace_back(-slopes_[v].first, slopes_[v].second);
+  }
+  pad_ = static_cast<size_t>(max_pace_) + 1;
+  margin_ = (pad_ + 31) / 32 * 32;
+  segment_ = kChunk + 2 * margin_;
+  queries_ = 0;
+  evidence_ = 0;
+  columns_ = 0;
+  costs_.clear();
+  reverse_.clear();
+  flipped_ = false;
+  best_.clear();
+  old_best_.clear();
+  chunk_minimum_.clear();
+}
+
+AlignedCosts& PaceMatcher::current(size_t pace)
+{
+  return slopes_[pace].first < 0 && flipped_ ? reverse_ : costs_;
+}
+
+const AlignedCosts& PaceMatcher::current(size_t pace) const
+{
+  return slopes_[pace].first < 0 && flipped_ ? reverse_ : costs_;
+}
+
+void PaceMatcher::resizeCosts(AlignedCosts& costs, size_t front, size_t size)
+{
+  // Places j of chunk j / kChunk at j % kChunk of each pace's segment: the rows of every pace over a chunk are
+  // one run of memory, which the kernel reads and writes in one go (17 rows of their own, each 512 bytes at a
+  // time, read and write at half the speed: the memory's row buffers and the prefetchers lose track).
+  const size_t paces = slopes_.size();
+  const size_t kept = std::min(size, columns_ - std::min(front, columns_));
+  const size_t chunks = (size + kChunk - 1) / kChunk;
+  if (front > 0 && kept > 0)
+  {
+    // Evicted places leave: every place moves, in runs within a chunk of both the old and the new layout.
+    AlignedCosts moved(chunks * paces * segment_, prior_);
+    for (size_t v = 0; v < paces; ++v)
+      for (size_t j = 0; j < kept;)
+      {
+        const size_t from = j + front;
+        const size_t run = std::min({kept - j, kChunk - j % kChunk, kChunk - from % kChunk});
+        std::copy_n(segment(costs, from / kChunk, v) + from % kChunk, run, segment(moved, j / kChunk, v) + j % kChunk);
+        j += run;
+      }
+    costs.swap(moved);
+    return;
+  }
+  costs.resize(chunks * paces * segment_, prior_);
+  // Places that join start as typical (the last chunk's places past the old end hold padding).
+  for (size_t v = 0; v < paces; ++v)
+    for (size_t j = kept; j < size;)
+    {
+      const size_t run = std::min(size - j, kChunk - j % kChunk);
+      std::fill_n(segment(costs, j / kChunk, v) + j % kChunk, run, prior_);
+      j += run;
+    }
+}
+
+void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
+{
+  candidates = std::min(candidates, reference.size());
+  // M keeps pad_ typical places on each side: forward paces read behind, reverse ones ahead, with no edge
+  // cases in the kernels. Places that stay keep their costs; new ones and the padding start at the previous
+  // row's mean.
+  const auto resize = [this](std::vector<int16_t>& row, size_t front, size_t size)
+  {
+    if (row.size() < 2 * pad_)
+      row.assign(2 * pad_, prior_);
+    const size_t kept = std::min(size, columns_ - std::min(front, columns_));
+    row.erase(row.begin() + static_cast<long>(pad_),
+              row.begin() + static_cast<long>(pad_ + std::min(front, columns_)));
+    row.resize(pad_ + kept);
+    row.resize(pad_ + size + pad_, prior_);
+    std::fill(row.begin(), row.begin() + static_cast<long>(pad_), prior_);
+  };
+  const auto resizeAll = [&](size_t front, size_t size)
+  {
+    resizeCosts(costs_, front, size);
+    if (bidirectional_)
+      resizeCosts(reverse_, front, size);
+    resize(best_, front, size);
+  };
+  if (reference.firstId() < first_id_ || (columns_ == 0 && reference.firstId() != first_id_))
+  {
+    // The reference restarted (or this is the first row): nothing of the old row applies.
+    resizeAll(columns_, 0);
+    columns_ = 0;
+    first_id_ = reference.firstId();
+  }
+  // Places evicted from the reference leave the row; places that join it (the reference grew, or the
+  // exclusion let them in) start as typical; places the exclusion took back are dropped.
+  const size_t gone = static_cast<size_t>(std::min<uint64_t>(reference.firstId() - first_id_, columns_));
+  first_id_ = reference.firstId();
+  resizeAll(gone, candidates);
+  columns_ = candidates;
+}
+
+void PaceMatcher::distances(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m)
+{
+  // raw_[tolerance + i] is the distance of place begin + i; neighbours past either end of the row never win
+  // the nearest distance.
+  const size_t n = columns_;
+  const size_t tolerance = static_cast<size_t>(tolerance_);
+  const size_t low = begin > tolerance ? begin - tolerance : 0;
+  const size_t high = std::min(n, begin + m + tolerance);
+  const uint32_t far = static_cast<uint32_t>(std::numeric_limits<int32_t>::max());
+  const size_t first = tolerance - (begin - low);
+  std::fill(raw_.begin(), raw_.begin() + static_cast<long>(first), far);
+  std::fill(raw_.begin() + static_cast<long>(first + (high - low)), raw_.begin() + static_cast<long>(m + 2 * tolerance), far);
+  metric_.row(query, reference.descriptor(low), high - low, raw_.data() + first);
+}
+
+void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates)
+{
+  const bool first_row = columns_ == 0;
+  align(reference, candidates);
+  const size_t n = columns_;
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  chunk_minimum_.assign(chunks, kNoPath);
+  if (n == 0)
+    return;
+  const uint64_t t = queries_++;
+  ++evidence_;
+  const size_t paces = slopes_.size();
+  // A row's first frame has no path behind it: every place starts from its own distance.
+  const float keep = first_row ? 0.0f : keep_;
+  const float fresh = 1.0f - keep;
+  // Changing pace costs `step_penalty_` standard deviations of a path's cost under noise: the frame distances
+  // of the previous row spread by spread_, their weighted mean over the path by spread_ * sqrt(fresh / (1 + keep)).
+  // So a path changes pace for a real change of the revisit, not to chase the noise of one frame, whatever the
+  // data, the descriptor and L are.
+  const float change_cost = keep > 0.0f ? step_penalty_ * spread_ * std::sqrt(fresh / (1.0f + keep)) : 0.0f;
+  // The fixed point: a in 1/32768 (at most 32767, L up to 65535), the entry weight 1 - a exactly, so that a path
+  // of equal distances d keeps the cost d.
+  pace_kernels::Chunk chunk;
+  const int32_t keep_fixed = std::min<int32_t>(32767, static_cast<int32_t>(std::lround(double(keep) * 32768.0)));
+  const double max_distance = static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
+  chunk.keep = static_cast<int16_t>(keep_fixed);
+  chunk.entry_scale =
+      static_cast<float>((32768.0 - keep_fixed) / 32768.0 * pace_kernels::kOne / max_distance);
+  chunk.change = static_cast<int16_t>(
+      std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
+  chunk.tolerance = tolerance_;
+  chunk.raw = raw_.data();
+  chunk.entry = entry_.data();
+  chunk.extra = extra_.data();
+  // The places each pace advances this frame: a path comes from j - step (forward) or j + step (reverse). A
+  // forward row is updated in place (a kernel never overwrites a place before reading what reads it); a reverse
+  // one goes to the other buffer.
+  std::vector<pace_kernels::PaceRow> rows(paces);
+  std::vector<long> offsets;
+  std::vector<uint8_t> slot(paces);
+  for (size_t v = 0; v < paces; ++v)
+  {
+    const int p = slopes_[v].first;
+    const long step = stepAt(t, std::abs(p), slopes_[v].second);
+    rows[v].offset = p > 0 ? -step : step;
+    const auto found = std::find(offsets.begin(), offsets.end(), rows[v].offset);
+    slot[v] = static_cast<uint8_t>(found - offsets.begin());
+    if (found == offsets.end())
+      offsets.push_back(rows[v].offset);
+  }
+  chunk.rows = rows.data();
+  chunk.paces = paces;
+  chunk.offsets = offsets.data();
+  chunk.distinct = offsets.size();
+  chunk.slot = slot.data();
+  with_change_.resize(offsets.size() * kChunk);
+  chunk.with_change = with_change_.data();
+  chunk.stride = kChunk;
+  chunk.smallest = smallest_.data();
+  // M_{t-1} is read while M_t is written: both keep pad_ typical places on each side.
+  std::swap(best_, old_best_);
+  best_.resize(old_best_.size());
+  chunk.old_best = old_best_.data() + pad_;
+  chunk.best = best_.data() + pad_;
+  const pace_kernels::ChunkFn kernel = pace_kernels::kernelFor(kernel_);
+  uint64_t distance_sum = 0, square_sum = 0;
+  // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
+  for (size_t k = 0; k < chunks; ++k)
+  {
+    chunk.begin = k * kChunk;
+    chunk.m = std::min(kChunk, n - chunk.begin);
+    for (size_t v = 0; v < paces; ++v)
+    {
+      // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the
+      // last places of the chunk before, copied before that chunk was updated in place; reverse, the first
+      // places of the chunk after, in the buffer that is only read.
+      AlignedCosts& from = current(v);
+      int16_t* own = segment(from, k, v);
+      const bool forward = slopes_[v].first > 0;
+      for (size_t q = 1; q <= pad_; ++q)
+        if (forward)
+        {
+          if (k == 0)
+            own[-static_cast<long>(q)] = prior_;
+          if (k + 1 < chunks)
+            segment(from, k + 1, v)[-static_cast<long>(q)] = own[kChunk - q];
+        }
+        else
+          own[chunk.m + q - 1] = k + 1 < chunks ? segment(from, k + 1, v)[q - 1] : prior_;
+      rows[v].from = own;
+      rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
+    }
+    distances(query, reference, chunk.begin, chunk.m);
+    const pace_kernels::ChunkSums sums = kernel(chunk);
+    distance_sum += sums.sum;
+    square_sum += sums.squares;
+    chunk_minimum_[k] = costOf(sums.minimum);
+  }
+  flipped_ = bidirectional_ && !flipped_;
+  const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
+  const double squares = static_cast<double>(square_sum) / static_cast<double>(n) / (max_distance * max_distance);
+  prior_ = static_cast<int16_t>(std::lround(std::min(1.0, mean) * pace_kernels::kOne));
+  spread_ = static_cast<float>(std::sqrt(std::max(0.0, squares - mean * mean)));
+}
+
+size_t PaceMatcher::paceIndex(size_t column) const
+{
+  const auto cost = [&](size_t v)
+  { return current(v)[(column / kChunk * slopes_.size() + v) * segment_ + margin_ + column % kChunk]; };
+  size_t index = 0;
+  for (size_t v = 1; v < slopes_.size(); ++v)
+    if (cost(v) < cost(index))
+      index = v;
+  return index;
+}
+
+float PaceMatcher::value(size_t column, int* direction) const
+{
+  if (direction)
+    *direction = slopes_[paceIndex(column)].first > 0 ? 1 : -1;
+  return costOf(best_[pad_ + column]);
+}
+
+float PaceMatcher::normalized(size_t column, int* direction, int min_terms) const
+{
+  const float best = value(column, direction);
+  if (evidence_ < static_cast<uint64_t>(std::min(std::max(1, min_terms), sequence_length_)) || !(best < kNoPath))
+    return std::nanf("");
+  return std::min(best, 1.0f);
+}
+
+uint16_t PaceMatcher::terms(size_t, int) const
+{
+  return static_cast<uint16_t>(std::min<uint64_t>(evidence_, static_cast<uint64_t>(sequence_length_)));
+}
+
+float PaceMatcher::chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const
+{
+  const size_t begin = chunk * kChunk;
+  const size_t end = std::min(columns(), begin + kChunk);
+  const auto near_taken = [&](size_t begin_or_end_column)
+  {
+    for (size_t t : taken)
+      if ((begin_or_end_column > t ? begin_or_end_column - t : t - begin_or_end_column) <= window)
+        return true;
+    return false;
+  };
+  bool touched = false;
+  for (size_t t : taken)
+    touched = touched || (t + window >= begin && t <= end - 1 + window);
+  if (!touched)
+    return chunk_minimum_[chunk];
+  float minimum = kNoPath;
+  for (size_t c = begin; c < end; ++c)
+    if (!near_taken(c))
+      minimum = std::min(minimum, value(c, nullptr));
+  return minimum;
+}
+
+size_t PaceMatcher::smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& taken) const
+{
+  taken.clear();
+  if (columns() == 0 || std::isnan(normalized(0, nullptr, min_terms)))
+    return 0;
+  const size_t chunks = chunk_minimum_.size();
+  std::vector<float> minimum(chunk_minimum_);
+  while (taken.size() < count)
+  {
+    size_t best = chunks;
+    for (size_t k = 0; k < chunks; ++k)
+      if (minimum[k] < kNoPath && (best == chunks || minimum[k] < minimum[best]))
+        best = k;
+    if (best == chunks)
+      break;
+    // The first column of that chunk with its minimum, outside every taken window.
+    const size_t begin = best * kChunk;
+    const size_t end = std::min(columns(), begin + kChunk);
+    size_t pick = end;
+    for (size_t c = begin; c < end && pick == end; ++c)
+    {
+      bool masked = false;
+      for (size_t t : taken)
+        masked = masked || (c > t ? c - t : t - c) <= window;
+      if (!masked && value(c, nullptr) == minimum[best])
+        pick = c;
+    }
+    if (pick == end)
+    {
+      minimum[best] = kNoPath;  // cannot happen: the minimum was computed over the same unmasked columns
+      continue;
+    }
+    taken.push_back(pick);
+    const size_t low = pick > window ? (pick - window) / kChunk : 0;
+    const size_t high = std::min(chunks - 1, (pick + window) / kChunk);
+    for (size_t k = low; k <= high; ++k)
+      minimum[k] = chunkMinimum(k, taken, window);
+  }
+  return columns();
+}
+
+}  // namespace openable
