@@ -3,6 +3,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <new>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -26,16 +28,63 @@ namespace openable
 /// revisit that speeds up or slows down is followed, while a path cannot zig-zag through the row picking the
 /// smallest distance of every frame (which would make every place look alike). With `bidirectional`, the
 /// reverse (places visited backwards: j + s) is kept the same way. One pass over the descriptors per frame,
-/// whatever L and max_pace are, plus one over the costs (a float a place and pace).
+/// whatever L and max_pace are, fused with one pass over the costs, chunk by chunk (the chunk's distances stay
+/// in L1): the costs are 16-bit fixed point (1.0 = 32767, products rounded, sums saturated), 2 bytes a place and
+/// pace, so a frame moves 48 + 17 x 4 bytes a place rather than 48 + 17 x 8, and a vector holds 16 or 32 places.
+/// The rounding moves a cost by at most about 3 L units of 1 / 32767 from the float recurrence (test_pace checks
+/// it); every kernel (portable, AVX2, AVX-512BW, chosen at run time) computes the same integers (test_pace_kernels).
 ///
 /// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
 /// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
+///
+/// The kernels of a frame's update; each one gives the same numbers (kBest: the fastest this CPU runs).
+enum class PaceKernel
+{
+  kBest,
+  kPortable,
+  kAvx2,
+  kAvx512
+};
+std::string paceKernelName(PaceKernel kernel);
+/// Kernels this CPU runs, slowest first (kBest not among them).
+std::vector<PaceKernel> supportedPaceKernels();
+
+/// Storage on 64-byte boundaries: the kernels' vectors then load and store whole cache lines.
+template <typename T>
+struct CacheAligned
+{
+  using value_type = T;
+  CacheAligned() = default;
+  template <typename U>
+  CacheAligned(const CacheAligned<U>&)
+  {
+  }
+  T* allocate(size_t n)
+  {
+    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(64)));
+  }
+  void deallocate(T* p, size_t)
+  {
+    ::operator delete(p, std::align_val_t(64));
+  }
+  bool operator==(const CacheAligned&) const
+  {
+    return true;
+  }
+  bool operator!=(const CacheAligned&) const
+  {
+    return false;
+  }
+};
+using AlignedCosts = std::vector<int16_t, CacheAligned<int16_t>>;
+
 /// How PaceMatcher follows a revisit (Config's max_pace, pace_penalty, pace_tolerance).
 struct PaceOptions
 {
   int max_pace = 3;        ///< paces from 1 / max_pace to max_pace places per frame
   float penalty = 3.0f;    ///< a change of pace, in standard deviations of a path's cost under noise
   int tolerance = 1;       ///< places a path may be off its line in each frame (0 .. 2)
+  PaceKernel kernel = PaceKernel::kBest;  ///< tests and benchmarks pick one; Error when the CPU lacks it
 };
 
 class PaceMatcher : public RowMatcher
@@ -57,7 +106,7 @@ public:
   uint16_t terms(size_t column, int direction) const override;
   float pace(size_t column) const override
   {
-    const auto& slope = slopes_[pace_[column]];
+    const auto& slope = slopes_[paceIndex(column)];
     return static_cast<float>(std::abs(slope.first)) / static_cast<float>(slope.second);
   }
   size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
@@ -81,13 +130,25 @@ public:
   }
 
 private:
-  /// Keeps the row aligned with the reference: drops evicted places, appends new ones at `prior`.
+  /// Keeps the rows aligned with the reference: drops evicted places, appends new ones at `prior`.
   void align(const PlaceDatabase& reference, size_t candidates);
-  /// exact_ and near_ for the chunk of columns [begin, begin + m).
-  void prepareChunk(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m);
+  /// raw_ for the chunk of columns [begin, begin + m), with tolerance_ neighbours on each side.
+  void distances(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m);
+  /// Keeps a buffer of costs aligned: drops `front` evicted places, keeps `size` places, new ones at `prior`.
+  void resizeCosts(AlignedCosts& costs, size_t front, size_t size);
+  /// The costs of pace `pace` over chunk `chunk` of a buffer, at place 0 of the chunk.
+  int16_t* segment(AlignedCosts& costs, size_t chunk, size_t pace) const
+  {
+    return costs.data() + (chunk * slopes_.size() + pace) * segment_ + margin_;
+  }
+  /// The buffer that holds a pace's costs of the last frame.
+  AlignedCosts& current(size_t pace);
+  const AlignedCosts& current(size_t pace) const;
   /// The smallest normalized() of chunk `chunk`, leaving out columns within `window` of a taken one.
   float chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const;
   float value(size_t column, int* direction) const;
+  /// The index in slopes_ of the pace of the column's best path (the first of the smallest costs).
+  size_t paceIndex(size_t column) const;
 
   FrameMetric metric_;
   int sequence_length_;
@@ -95,30 +156,32 @@ private:
   bool bidirectional_;
   float step_penalty_;
   int tolerance_;
+  PaceKernel kernel_;
   std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
   float keep_ = 0.0f;  ///< a = 1 - 1/L, the weight of the path so far
-  float inverse_max_distance_ = 0.0f;
   uint64_t queries_ = 0;
   uint64_t evidence_ = 0;  ///< query frames that had places to match since the last reset
   uint64_t first_id_ = 0;
-  float prior_ = 0.0f;
-  float spread_ = 0.0f;  ///< the previous row's standard deviation of frame distances  ///< the previous row's mean frame distance: the start of a place that joins the row
-  std::vector<std::vector<float>> rows_;  ///< C[j, v]: one row of places per pace, and pad_ typical ones after
+  float spread_ = 0.0f;  ///< the previous row's standard deviation of frame distances
+  int16_t prior_ = 0;    ///< the previous row's mean frame distance: the start of a place that joins the row
+  /// C[j, v]: per chunk of kChunk places, per pace, a segment of pad_ places, the chunk's places and pad_ more
+  /// (paces read up to pad_ places beyond the chunk; the padding holds copies of those).
+  AlignedCosts costs_;
+  AlignedCosts reverse_;  ///< with bidirectional: reverse paces read one buffer and write the other
+  bool flipped_ = false;          ///< the reverse paces' last costs are in reverse_
   size_t pad_ = 4;  ///< more places than any pace advances in a frame
-  std::vector<float> best_;      ///< M[j] at pad_ + j: the smallest of a place's costs, judged by its own distance
-  std::vector<float> old_best_;  ///< the previous frame's M, while match() runs
-  std::vector<uint8_t> pace_;  ///< the index in slopes_ of the pace M[j] comes from
-  uint8_t one_ = 0;            ///< the index of pace 1
+  size_t margin_ = 32;  ///< pad_ rounded up to whole vectors: every segment's places start on a cache line
+  size_t segment_ = 0;  ///< kChunk + 2 margin_
+  std::vector<int16_t> best_;      ///< M[j] at pad_ + j: the smallest of a place's costs, judged by its own distance
+  std::vector<int16_t> old_best_;  ///< the previous frame's M, while match() runs
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.
-  std::vector<uint32_t> raw_;        ///< integer frame distances
-  std::vector<float> exact_;  ///< d(t, j), normalised
-  std::vector<float> near_;   ///< the smallest d(t, .) within pace_tolerance of j
-  std::vector<float> old_;    ///< one pace's previous costs around a chunk
-  std::vector<float> carry_;  ///< per pace, the previous frame's costs of the pad_ places before the chunk
-  std::vector<long> steps_;   ///< places each pace advances this frame
-  std::vector<int32_t> pace_chunk_;  ///< the chunk's best paces while match() runs
+  std::vector<uint32_t> raw_;     ///< frame distances
+  AlignedCosts entry_;    ///< the entry terms of the kernel
+  AlignedCosts extra_;
+  AlignedCosts smallest_;
+  AlignedCosts with_change_;
 };
 
 }  // namespace openable

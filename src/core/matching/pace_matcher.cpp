@@ -6,14 +6,16 @@
 #include <string>
 
 #include "openable/error.h"
+#include "pace_kernels.h"
 
 namespace openable
 {
 namespace
 {
-/// Columns processed together: one chunk of distances stays in L1, and each chunk gets one minimum for
-/// smallestDistinct().
-constexpr size_t kChunk = 256;
+/// Columns processed together: a chunk's distances and scratch stay in L1/L2, its costs are one run of memory
+/// of 17 x 4 KB (256 columns: a frame at 1e7 places took 73 ms, 1024: 54, 2048: 55, 4096: 54, while 1e5 places
+/// slowed down past 2048), and each chunk gets one minimum for smallestDistinct().
+constexpr size_t kChunk = 2048;
 /// The cost of a path that does not exist (before the first place): never the minimum, never overflows.
 constexpr float kNoPath = 1e30f;
 
@@ -36,6 +38,12 @@ std::vector<std::pair<int, int>> slopesFor(int max_pace)
   return slopes;
 }
 
+/// A cost of the kernels as a normalised distance.
+float costOf(int16_t cost)
+{
+  return static_cast<float>(cost) / static_cast<float>(pace_kernels::kOne);
+}
+
 /// Places a pace of p / q advances at frame t: the straight line's position floor(t p / q), differenced.
 int stepAt(uint64_t t, int p, int q)
 {
@@ -52,7 +60,7 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     bidirectional_(bidirectional),
     step_penalty_(options.penalty),
     tolerance_(options.tolerance),
-    inverse_max_distance_(1.0f / static_cast<float>(std::max<uint64_t>(1, layout.maxFrameDistance())))
+    kernel_(options.kernel)
 {
   if (max_pace_ < 1 || max_pace_ > 64)
     throw Error("max_pace " + std::to_string(max_pace_) + " is out of range; expected 1..64 places per frame");
@@ -60,11 +68,12 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     throw Error("pace_penalty must be finite and >= 0");
   if (tolerance_ < 0 || tolerance_ > 2)
     throw Error("pace_tolerance " + std::to_string(tolerance_) + " is out of range; expected 0..2 places");
+  pace_kernels::kernelFor(kernel_);  // throws now rather than at the first frame
   setSequenceLength(sequence_length);
   raw_.resize(kChunk + 2 * static_cast<size_t>(tolerance_));
-  exact_.resize(kChunk);
-  near_.resize(kChunk);
-  pace_chunk_.resize(kChunk);
+  entry_.resize(kChunk);
+  extra_.resize(kChunk);
+  smallest_.resize(kChunk);
 }
 
 void PaceMatcher::setSequenceLength(int sequence_length)
@@ -91,51 +100,92 @@ void PaceMatcher::reset()
     for (size_t v = 0; v < forward; ++v)
       slopes_.emplace_back(-slopes_[v].first, slopes_[v].second);
   }
-  one_ = static_cast<uint8_t>(std::find(slopes_.begin(), slopes_.end(), std::make_pair(60, 60)) - slopes_.begin());
   pad_ = static_cast<size_t>(max_pace_) + 1;
-  old_.resize(kChunk + 2 * pad_);
+  margin_ = (pad_ + 31) / 32 * 32;
+  segment_ = kChunk + 2 * margin_;
   queries_ = 0;
   evidence_ = 0;
   columns_ = 0;
-  rows_.assign(slopes_.size(), std::vector<float>());
+  costs_.clear();
+  reverse_.clear();
+  flipped_ = false;
   best_.clear();
   old_best_.clear();
-  pace_.clear();
   chunk_minimum_.clear();
+}
+
+AlignedCosts& PaceMatcher::current(size_t pace)
+{
+  return slopes_[pace].first < 0 && flipped_ ? reverse_ : costs_;
+}
+
+const AlignedCosts& PaceMatcher::current(size_t pace) const
+{
+  return slopes_[pace].first < 0 && flipped_ ? reverse_ : costs_;
+}
+
+void PaceMatcher::resizeCosts(AlignedCosts& costs, size_t front, size_t size)
+{
+  // Places j of chunk j / kChunk at j % kChunk of each pace's segment: the rows of every pace over a chunk are
+  // one run of memory, which the kernel reads and writes in one go (17 rows of their own, each 512 bytes at a
+  // time, read and write at half the speed: the memory's row buffers and the prefetchers lose track).
+  const size_t paces = slopes_.size();
+  const size_t kept = std::min(size, columns_ - std::min(front, columns_));
+  const size_t chunks = (size + kChunk - 1) / kChunk;
+  if (front > 0 && kept > 0)
+  {
+    // Evicted places leave: every place moves, in runs within a chunk of both the old and the new layout.
+    AlignedCosts moved(chunks * paces * segment_, prior_);
+    for (size_t v = 0; v < paces; ++v)
+      for (size_t j = 0; j < kept;)
+      {
+        const size_t from = j + front;
+        const size_t run = std::min({kept - j, kChunk - j % kChunk, kChunk - from % kChunk});
+        std::copy_n(segment(costs, from / kChunk, v) + from % kChunk, run, segment(moved, j / kChunk, v) + j % kChunk);
+        j += run;
+      }
+    costs.swap(moved);
+    return;
+  }
+  costs.resize(chunks * paces * segment_, prior_);
+  // Places that join start as typical (the last chunk's places past the old end hold padding).
+  for (size_t v = 0; v < paces; ++v)
+    for (size_t j = kept; j < size;)
+    {
+      const size_t run = std::min(size - j, kChunk - j % kChunk);
+      std::fill_n(segment(costs, j / kChunk, v) + j % kChunk, run, prior_);
+      j += run;
+    }
 }
 
 void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
 {
   candidates = std::min(candidates, reference.size());
-  // Rows keep pad_ typical places after the last (reverse paces read ahead), the M buffers pad_ on each side
-  // (forward paces read behind): no edge cases in the loops.
-  const auto resize = [this](size_t front, size_t size)
+  // M keeps pad_ typical places on each side: forward paces read behind, reverse ones ahead, with no edge
+  // cases in the kernels. Places that stay keep their costs; new ones and the padding start at the previous
+  // row's mean.
+  const auto resize = [this](std::vector<int16_t>& row, size_t front, size_t size)
   {
-    for (auto& row : rows_)
-    {
-      row.erase(row.begin(), row.begin() + static_cast<long>(std::min(front, row.size())));
-      row.resize(size);  // keeps the old typical padding as the first new places
-      row.resize(size + pad_, prior_);
-      std::fill(row.begin() + static_cast<long>(std::min(size, columns_ - std::min(front, columns_))), row.end(),
-                prior_);
-    }
-    best_.erase(best_.begin() + static_cast<long>(pad_),
-                best_.begin() + static_cast<long>(pad_ + std::min(front, columns_)));
-    best_.resize(pad_ + size);
-    std::fill(best_.begin() + static_cast<long>(pad_ + std::min(size, columns_ - std::min(front, columns_))),
-              best_.end(), prior_);
-    best_.resize(pad_ + size + pad_, prior_);
-    std::fill(best_.begin(), best_.begin() + static_cast<long>(pad_), prior_);
-    std::fill(best_.end() - static_cast<long>(pad_), best_.end(), prior_);
-    pace_.erase(pace_.begin(), pace_.begin() + static_cast<long>(std::min(front, pace_.size())));
-    pace_.resize(size, one_);
+    if (row.size() < 2 * pad_)
+      row.assign(2 * pad_, prior_);
+    const size_t kept = std::min(size, columns_ - std::min(front, columns_));
+    row.erase(row.begin() + static_cast<long>(pad_),
+              row.begin() + static_cast<long>(pad_ + std::min(front, columns_)));
+    row.resize(pad_ + kept);
+    row.resize(pad_ + size + pad_, prior_);
+    std::fill(row.begin(), row.begin() + static_cast<long>(pad_), prior_);
   };
-  if (best_.size() < 2 * pad_)
-    best_.assign(2 * pad_, prior_);
+  const auto resizeAll = [&](size_t front, size_t size)
+  {
+    resizeCosts(costs_, front, size);
+    if (bidirectional_)
+      resizeCosts(reverse_, front, size);
+    resize(best_, front, size);
+  };
   if (reference.firstId() < first_id_ || (columns_ == 0 && reference.firstId() != first_id_))
   {
     // The reference restarted (or this is the first row): nothing of the old row applies.
-    resize(columns_, 0);
+    resizeAll(columns_, 0);
     columns_ = 0;
     first_id_ = reference.firstId();
   }
@@ -143,35 +193,23 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
   // exclusion let them in) start as typical; places the exclusion took back are dropped.
   const size_t gone = static_cast<size_t>(std::min<uint64_t>(reference.firstId() - first_id_, columns_));
   first_id_ = reference.firstId();
-  resize(gone, candidates);
+  resizeAll(gone, candidates);
   columns_ = candidates;
 }
 
-void PaceMatcher::prepareChunk(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m)
+void PaceMatcher::distances(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m)
 {
-  // The chunk's distances and `tolerance` places on each side.
+  // raw_[tolerance + i] is the distance of place begin + i; neighbours past either end of the row never win
+  // the nearest distance.
   const size_t n = columns_;
   const size_t tolerance = static_cast<size_t>(tolerance_);
   const size_t low = begin > tolerance ? begin - tolerance : 0;
   const size_t high = std::min(n, begin + m + tolerance);
-  metric_.row(query, reference.descriptor(low), high - low, raw_.data());
-  const uint32_t* own = raw_.data() + (begin - low);
-  for (size_t i = 0; i < m; ++i)
-  {
-    // A path may be off its line by `tolerance` places (a pace between two of the slopes): each frame counts
-    // the nearest of the place and its neighbours within it.
-    const size_t j = begin + i;
-    uint32_t nearest = own[i];
-    for (size_t k = 1; k <= tolerance; ++k)
-    {
-      if (j >= k)
-        nearest = std::min(nearest, own[static_cast<long>(i) - static_cast<long>(k)]);
-      if (j + k < n)
-        nearest = std::min(nearest, own[i + k]);
-    }
-    exact_[i] = static_cast<float>(own[i]) * inverse_max_distance_;
-    near_[i] = static_cast<float>(nearest) * inverse_max_distance_;
-  }
+  const uint32_t far = static_cast<uint32_t>(std::numeric_limits<int32_t>::max());
+  const size_t first = tolerance - (begin - low);
+  std::fill(raw_.begin(), raw_.begin() + static_cast<long>(first), far);
+  std::fill(raw_.begin() + static_cast<long>(first + (high - low)), raw_.begin() + static_cast<long>(m + 2 * tolerance), far);
+  metric_.row(query, reference.descriptor(low), high - low, raw_.data() + first);
 }
 
 void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates)
@@ -179,21 +217,13 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   const bool first_row = columns_ == 0;
   align(reference, candidates);
   const size_t n = columns_;
-  chunk_minimum_.assign((n + kChunk - 1) / kChunk, kNoPath);
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  chunk_minimum_.assign(chunks, kNoPath);
   if (n == 0)
     return;
   const uint64_t t = queries_++;
   ++evidence_;
-  const size_t slopes = slopes_.size();
-  // The places each pace advances this frame: a path comes from j - step (forward) or j + step (reverse).
-  std::vector<long>& steps = steps_;
-  steps.resize(slopes);
-  for (size_t v = 0; v < slopes; ++v)
-  {
-    const int p = slopes_[v].first;
-    const long step = stepAt(t, std::abs(p), slopes_[v].second);
-    steps[v] = p > 0 ? step : -step;
-  }
+  const size_t paces = slopes_.size();
   // A row's first frame has no path behind it: every place starts from its own distance.
   const float keep = first_row ? 0.0f : keep_;
   const float fresh = 1.0f - keep;
@@ -202,84 +232,107 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   // So a path changes pace for a real change of the revisit, not to chase the noise of one frame, whatever the
   // data, the descriptor and L are.
   const float change_cost = keep > 0.0f ? step_penalty_ * spread_ * std::sqrt(fresh / (1.0f + keep)) : 0.0f;
-  // M_{t-1} is read while M_t is written; both keep pad_ typical places on each side.
-  std::swap(best_, old_best_);
-  best_.assign(old_best_.size(), prior_);
-  // A forward pace reads up to pad_ places before its own, already overwritten by the chunk before: the
-  // previous frame's costs of those places are carried from chunk to chunk.
-  carry_.assign(slopes * pad_, prior_);
-  double distance_sum = 0.0, square_sum = 0.0;
-  for (size_t begin = 0, chunk = 0; begin < n; begin += kChunk, ++chunk)
+  // The fixed point: a in 1/32768 (at most 32767, L up to 65535), the entry weight 1 - a exactly, so that a path
+  // of equal distances d keeps the cost d.
+  pace_kernels::Chunk chunk;
+  const int32_t keep_fixed = std::min<int32_t>(32767, static_cast<int32_t>(std::lround(double(keep) * 32768.0)));
+  const double max_distance = static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
+  chunk.keep = static_cast<int16_t>(keep_fixed);
+  chunk.entry_scale =
+      static_cast<float>((32768.0 - keep_fixed) / 32768.0 * pace_kernels::kOne / max_distance);
+  chunk.change = static_cast<int16_t>(
+      std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
+  chunk.tolerance = tolerance_;
+  chunk.raw = raw_.data();
+  chunk.entry = entry_.data();
+  chunk.extra = extra_.data();
+  // The places each pace advances this frame: a path comes from j - step (forward) or j + step (reverse). A
+  // forward row is updated in place (a kernel never overwrites a place before reading what reads it); a reverse
+  // one goes to the other buffer.
+  std::vector<pace_kernels::PaceRow> rows(paces);
+  std::vector<long> offsets;
+  std::vector<uint8_t> slot(paces);
+  for (size_t v = 0; v < paces; ++v)
   {
-    const size_t m = std::min(kChunk, n - begin);
-    prepareChunk(query, reference, begin, m);
-    float* best = best_.data() + pad_ + begin;
-    uint8_t* pace = pace_.data() + begin;
-    for (size_t i = 0; i < m; ++i)
-    {
-      distance_sum += exact_[i];
-      square_sum += double(exact_[i]) * exact_[i];
-      best[i] = kNoPath;
-      pace_chunk_[i] = one_;
-    }
-    const float* old_best = old_best_.data() + pad_ + begin;
-    for (size_t v = 0; v < slopes; ++v)
-    {
-      float* row = rows_[v].data() + begin;
-      const long step = steps[v];
-      // old[i - step] is the previous frame's cost of place begin + i - step.
-      const float* old = row;
-      if (step >= 0)
-      {
-        float* scratch = old_.data();
-        std::copy(carry_.begin() + static_cast<long>(v * pad_), carry_.begin() + static_cast<long>((v + 1) * pad_),
-                  scratch);
-        std::copy(row, row + m, scratch + pad_);
-        std::copy(scratch + m, scratch + m + pad_, carry_.begin() + static_cast<long>(v * pad_));
-        old = scratch + pad_;
-      }
-      else if (step < 0)
-      {
-        std::copy(row, row + m - step, old_.data());  // the places after the chunk are in the row (or its padding)
-        old = old_.data();
-      }
-      const float* __restrict from = old - step;
-      const float* __restrict from_best = old_best - step;
-      const float* __restrict d = near_.data();
-      float* __restrict out = row;
-      for (size_t i = 0; i < m; ++i)
-        out[i] = fresh * d[i] + keep * std::min(from[i], from_best[i] + change_cost);
-      // The best pace so far, in 32-bit lanes beside the float costs so that the loop vectorises.
-      float* __restrict best_chunk = best;
-      int32_t* __restrict pace_chunk = pace_chunk_.data();
-      const int32_t index = static_cast<int32_t>(v);
-      for (size_t i = 0; i < m; ++i)
-      {
-        const int32_t better = -static_cast<int32_t>(out[i] < best_chunk[i]);  // all ones where this pace wins
-        best_chunk[i] = std::min(out[i], best_chunk[i]);
-        pace_chunk[i] = (pace_chunk[i] & ~better) | (index & better);
-      }
-    }
-    for (size_t i = 0; i < m; ++i)
-      pace[i] = static_cast<uint8_t>(pace_chunk_[i]);
-    // The place itself is judged by its own distance this frame: the tolerance is for the path behind it.
-    float minimum = kNoPath;
-    for (size_t i = 0; i < m; ++i)
-    {
-      best[i] += fresh * (exact_[i] - near_[i]);
-      minimum = std::min(minimum, best[i]);
-    }
-    chunk_minimum_[chunk] = minimum;
+    const int p = slopes_[v].first;
+    const long step = stepAt(t, std::abs(p), slopes_[v].second);
+    rows[v].offset = p > 0 ? -step : step;
+    const auto found = std::find(offsets.begin(), offsets.end(), rows[v].offset);
+    slot[v] = static_cast<uint8_t>(found - offsets.begin());
+    if (found == offsets.end())
+      offsets.push_back(rows[v].offset);
   }
-  prior_ = static_cast<float>(distance_sum / static_cast<double>(n));
-  spread_ = static_cast<float>(std::sqrt(std::max(0.0, square_sum / static_cast<double>(n) - double(prior_) * prior_)));
+  chunk.rows = rows.data();
+  chunk.paces = paces;
+  chunk.offsets = offsets.data();
+  chunk.distinct = offsets.size();
+  chunk.slot = slot.data();
+  with_change_.resize(offsets.size() * kChunk);
+  chunk.with_change = with_change_.data();
+  chunk.stride = kChunk;
+  chunk.smallest = smallest_.data();
+  // M_{t-1} is read while M_t is written: both keep pad_ typical places on each side.
+  std::swap(best_, old_best_);
+  best_.resize(old_best_.size());
+  chunk.old_best = old_best_.data() + pad_;
+  chunk.best = best_.data() + pad_;
+  const pace_kernels::ChunkFn kernel = pace_kernels::kernelFor(kernel_);
+  uint64_t distance_sum = 0, square_sum = 0;
+  // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
+  for (size_t k = 0; k < chunks; ++k)
+  {
+    chunk.begin = k * kChunk;
+    chunk.m = std::min(kChunk, n - chunk.begin);
+    for (size_t v = 0; v < paces; ++v)
+    {
+      // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the
+      // last places of the chunk before, copied before that chunk was updated in place; reverse, the first
+      // places of the chunk after, in the buffer that is only read.
+      AlignedCosts& from = current(v);
+      int16_t* own = segment(from, k, v);
+      const bool forward = slopes_[v].first > 0;
+      for (size_t q = 1; q <= pad_; ++q)
+        if (forward)
+        {
+          if (k == 0)
+            own[-static_cast<long>(q)] = prior_;
+          if (k + 1 < chunks)
+            segment(from, k + 1, v)[-static_cast<long>(q)] = own[kChunk - q];
+        }
+        else
+          own[chunk.m + q - 1] = k + 1 < chunks ? segment(from, k + 1, v)[q - 1] : prior_;
+      rows[v].from = own;
+      rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
+    }
+    distances(query, reference, chunk.begin, chunk.m);
+    const pace_kernels::ChunkSums sums = kernel(chunk);
+    distance_sum += sums.sum;
+    square_sum += sums.squares;
+    chunk_minimum_[k] = costOf(sums.minimum);
+  }
+  flipped_ = bidirectional_ && !flipped_;
+  const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
+  const double squares = static_cast<double>(square_sum) / static_cast<double>(n) / (max_distance * max_distance);
+  prior_ = static_cast<int16_t>(std::lround(std::min(1.0, mean) * pace_kernels::kOne));
+  spread_ = static_cast<float>(std::sqrt(std::max(0.0, squares - mean * mean)));
+}
+
+size_t PaceMatcher::paceIndex(size_t column) const
+{
+  const auto cost = [&](size_t v)
+  { return current(v)[(column / kChunk * slopes_.size() + v) * segment_ + margin_ + column % kChunk]; };
+  size_t index = 0;
+  for (size_t v = 1; v < slopes_.size(); ++v)
+    if (cost(v) < cost(index))
+      index = v;
+  return index;
 }
 
 float PaceMatcher::value(size_t column, int* direction) const
 {
   if (direction)
-    *direction = slopes_[pace_[column]].first > 0 ? 1 : -1;
-  return best_[pad_ + column];
+    *direction = slopes_[paceIndex(column)].first > 0 ? 1 : -1;
+  return costOf(best_[pad_ + column]);
 }
 
 float PaceMatcher::normalized(size_t column, int* direction, int min_terms) const

@@ -1,0 +1,141 @@
+#pragma once
+
+// The per-frame kernel of PaceMatcher, private to the core library:
+//   pace_kernels.cpp      the portable kernel (every architecture) and the run-time choice of a kernel
+//   pace_kernels_x86.cpp  AVX2 and AVX-512BW kernels (x86 only; each function carries GCC's target attribute,
+//                         so the library builds without -march and runs on any x86-64)
+// Every kernel computes exactly the same integers (16-bit fixed point, saturating adds, rounded products): a
+// frame's costs do not depend on the CPU, and the tests compare each kernel with a plain reference.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "openable/matching/pace_matcher.h"
+
+namespace openable
+{
+namespace pace_kernels
+{
+/// A cost of 1.0 (every bit different along the whole path) in the fixed point of the costs.
+constexpr int32_t kOne = 32767;
+
+/// One pace over a chunk: the previous costs of its places and where this frame's go (the same memory for a
+/// forward pace, updated in place; another buffer for a reverse one).
+struct PaceRow
+{
+  const int16_t* from;  ///< previous frame's costs, indexed by place in the chunk; valid from -pad to m + pad
+  int16_t* to;          ///< this frame's costs, indexed by place in the chunk
+  long offset;          ///< where the path comes from: -step (forward) or +step (reverse)
+};
+
+/// One chunk of places [begin, begin + m) of a frame.
+struct Chunk
+{
+  /// The chunk's Hamming (or quantised L2) distances at raw[tolerance + i], with `tolerance` neighbours on each
+  /// side (INT32_MAX past either end of the row).
+  const uint32_t* raw;
+  size_t begin;
+  size_t m;
+  int tolerance;
+  float entry_scale;  ///< the entry term of distance r: nearbyint(float(r) * entry_scale) (the weight 1 - a in it)
+  int16_t keep;       ///< a in 1/32768: a product x * a is (x * keep + 2^14) >> 15
+  int16_t change;     ///< the cost of a change of pace
+  const int16_t* old_best;  ///< M of the previous frame, indexed by place; valid from -pad to n + pad
+  int16_t* best;            ///< M of this frame, indexed by place
+  const PaceRow* rows;
+  size_t paces;
+  /// The distinct offsets of this frame's paces (a kernel adds the change cost to M once per offset), and for
+  /// each pace the index of its offset among them.
+  const long* offsets;
+  size_t distinct;
+  const uint8_t* slot;
+  // Scratch of at least m entries each.
+  int16_t* entry;  ///< the entry term of the nearest distance within the tolerance
+  int16_t* extra;  ///< the entry term of the place's own distance minus that one (M is judged by its own)
+  int16_t* smallest;     ///< the smallest cost of each place
+  int16_t* with_change;  ///< M' + change for each offset, `stride` entries each
+  size_t stride;
+};
+
+/// Sums over the chunk's own distances (the row's mean and spread give the next frame its prior and its change
+/// cost), in integers so that they do not depend on the kernel.
+struct ChunkSums
+{
+  uint64_t sum = 0;
+  uint64_t squares = 0;
+  int16_t minimum = kOne;  ///< the smallest M of the chunk
+};
+
+/// Updates every pace's costs and M for the chunk's places. Forward rows are updated in place: the portable and
+/// AVX2 kernels go from the chunk's last place down (a place reads places before it, not yet overwritten), the
+/// AVX-512 one up, carrying the previous costs of the places behind in a register. The chunk's padding holds the
+/// previous costs of the places beyond it.
+using ChunkFn = ChunkSums (*)(const Chunk&);
+
+ChunkSums chunkPortable(const Chunk& chunk);  // pace_kernels.cpp
+#if defined(__x86_64__) || defined(__i386__)
+ChunkSums chunkAvx2(const Chunk& chunk);    // pace_kernels_x86.cpp
+ChunkSums chunkAvx512(const Chunk& chunk);  // pace_kernels_x86.cpp
+#endif
+
+/// The kernel for `kernel` (kBest: the fastest this CPU runs); throws Error when the CPU cannot run it.
+ChunkFn kernelFor(PaceKernel kernel);
+
+/// Saturating 16-bit arithmetic of the kernels, written once for the portable kernel and the tests' reference.
+inline int16_t addSaturated(int32_t a, int32_t b)
+{
+  const int32_t s = a + b;
+  return static_cast<int16_t>(s > 32767 ? 32767 : (s < -32768 ? -32768 : s));
+}
+/// x * keep / 32768, rounded half up (x86's pmulhrsw, Arm's sqrdmulh).
+inline int16_t scaled(int32_t x, int32_t keep)
+{
+  return static_cast<int16_t>((x * keep + 16384) >> 15);
+}
+
+/// The entry term of a distance: float(r) * scale, at most 1.0, rounded to the nearest (even) integer, as
+/// vcvtdq2ps, vmulps, vminps and vcvtps2dq compute it.
+inline int16_t entryOf(uint32_t r, float scale)
+{
+  const float x = std::min(static_cast<float>(static_cast<int32_t>(r)) * scale, static_cast<float>(kOne));
+  return static_cast<int16_t>(std::nearbyint(x));
+}
+
+/// The entry terms of place i of the chunk; adds its own distance to the sums. The vector kernels' tails.
+inline void prepare(const Chunk& c, size_t i, ChunkSums& sums)
+{
+  const uint32_t* own = c.raw + c.tolerance;
+  const uint32_t r = own[i];
+  sums.sum += r;
+  sums.squares += static_cast<uint64_t>(r) * r;
+  uint32_t nearest = r;
+  for (long k = 1; k <= c.tolerance; ++k)
+    nearest = std::min({nearest, own[static_cast<long>(i) - k], own[static_cast<long>(i) + k]});
+  c.entry[i] = entryOf(nearest, c.entry_scale);
+  c.extra[i] = static_cast<int16_t>(entryOf(r, c.entry_scale) - c.entry[i]);
+}
+
+/// Every pace's cost and M of place i of the chunk:
+///   C[j, v] = entry + a * min(C'[j + offset_v, v], M'[j + offset_v] + change),  M[j] = min_v C[j, v] + extra
+/// (primes: the previous frame). The vector kernels' tails.
+inline void update(const Chunk& c, size_t i, ChunkSums& sums)
+{
+  const size_t j = c.begin + i;
+  int16_t best = static_cast<int16_t>(kOne);
+  for (size_t v = 0; v < c.paces; ++v)
+  {
+    const PaceRow& row = c.rows[v];
+    const long from = static_cast<long>(i) + row.offset;
+    const int16_t path = std::min(row.from[from], addSaturated(c.old_best[static_cast<long>(j) + row.offset], c.change));
+    const int16_t cost = addSaturated(c.entry[i], scaled(path, c.keep));
+    row.to[i] = cost;
+    best = std::min(best, cost);
+  }
+  c.best[j] = addSaturated(best, c.extra[i]);
+  sums.minimum = std::min(sums.minimum, c.best[j]);
+}
+
+}  // namespace pace_kernels
+}  // namespace openable

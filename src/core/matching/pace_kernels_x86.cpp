@@ -1,0 +1,266 @@
+// The AVX2 and AVX-512BW kernels of PaceMatcher (x86 only; on other architectures this file compiles to
+// nothing). Each function carries GCC's target attribute, so the library builds for any x86-64 and
+// pace_kernels.cpp picks a kernel the running CPU supports. They compute exactly what chunkPortable computes:
+// 16 (AVX2) or 32 (AVX-512) places a vector, one 16-bit lane a place, the same rounding and saturation.
+#if defined(__x86_64__) || defined(__i386__)
+
+#include <immintrin.h>
+
+#include "pace_kernels.h"
+
+// GCC 12's AVX-512 headers start vectors from _mm512_undefined_*, which -Wmaybe-uninitialized reports in every
+// caller (a false positive, as in hamming_avx512.cpp).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+namespace openable
+{
+namespace pace_kernels
+{
+namespace
+{
+// ---------------------------------------------------------------------------------------------- AVX-512BW
+template <bool kMasked>
+__attribute__((target("avx512f,avx512bw"))) inline __m512i load512(__mmask32 mask, const int16_t* p)
+{
+  return kMasked ? _mm512_maskz_loadu_epi16(mask, p) : _mm512_loadu_si512(p);
+}
+
+template <bool kMasked>
+__attribute__((target("avx512f,avx512bw"))) inline void store512(__mmask32 mask, int16_t* p, __m512i x)
+{
+  if (kMasked)
+    _mm512_mask_storeu_epi16(p, mask, x);
+  else
+    _mm512_storeu_si512(p, x);
+}
+
+/// Entry terms of 16 places: vcvtdq2ps, vmulps, vminps, vcvtps2dq (round to nearest even), vpmovdw.
+__attribute__((target("avx512f,avx512bw"))) inline __m256i entries512(__m512i r, __m512 scale)
+{
+  const __m512 x = _mm512_min_ps(_mm512_mul_ps(_mm512_cvtepi32_ps(r), scale), _mm512_set1_ps(float(kOne)));
+  return _mm512_cvtepi32_epi16(_mm512_cvtps_epi32(x));
+}
+
+/// One pace's costs for the 32 places from i (fewer under a mask) from the previous costs of the places it comes
+/// from, and the smallest cost of each place so far.
+template <bool kMasked>
+__attribute__((target("avx512f,avx512bw"))) inline void pace512(__m512i old, int16_t* to, const int16_t* with_change,
+                                                                const int16_t* entry, int16_t* best, size_t i,
+                                                                __mmask32 mask, __m512i keep)
+{
+  const __m512i path = _mm512_min_epi16(old, load512<kMasked>(mask, with_change + i));
+  const __m512i cost = _mm512_adds_epi16(load512<kMasked>(mask, entry + i), _mm512_mulhrs_epi16(path, keep));
+  store512<kMasked>(mask, to + i, cost);
+  store512<kMasked>(mask, best + i, _mm512_min_epi16(load512<kMasked>(mask, best + i), cost));
+}
+
+/// A forward pace over the chunk, updated in place in the order of memory: each block's previous costs are kept
+/// in a register before they are overwritten, and the places `step` behind are a permutation of that block and
+/// the next (the first block's come from the segment's padding).
+__attribute__((target("avx512f,avx512bw"))) inline void forward512(int16_t* row, long step, const int16_t* with_change,
+                                                                   const int16_t* entry, int16_t* best, size_t whole,
+                                                                   __mmask32 top, __m512i keep)
+{
+  // shifted[k] = (before, now)[32 + k - step]: indices 0..31 pick `before`, 32..63 `now`.
+  const __m512i index = _mm512_add_epi16(
+      _mm512_set_epi16(31, 30, 29, 28, 27, 26, 25, 24, 23, 22, 21, 20, 19, 18, 17, 16, 15, 14, 13, 12, 11, 10, 9, 8, 7,
+                       6, 5, 4, 3, 2, 1, 0),
+      _mm512_set1_epi16(static_cast<int16_t>(32 - step)));
+  // Only the last `step` lanes of the block before the chunk are used: the padding, nothing before it is read.
+  const __mmask32 padding = step > 0 ? __mmask32(~0u << (32 - step)) : __mmask32(0);
+  __m512i before = _mm512_maskz_loadu_epi16(padding, row - 32);
+  for (size_t i = 0; i < whole; i += 32)
+  {
+    const __m512i now = _mm512_loadu_si512(row + i);
+    pace512<false>(_mm512_permutex2var_epi16(before, index, now), row, with_change, entry, best, i, ~__mmask32(0), keep);
+    before = now;
+  }
+  if (top)
+  {
+    const __m512i now = _mm512_maskz_loadu_epi16(top, row + whole);
+    pace512<true>(_mm512_permutex2var_epi16(before, index, now), row, with_change, entry, best, whole, top, keep);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------- AVX2
+/// Entry terms of 8 places, as entries512.
+__attribute__((target("avx2"))) inline __m128i entries256(__m256i r, __m256 scale)
+{
+  const __m256 x = _mm256_min_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(r), scale), _mm256_set1_ps(float(kOne)));
+  const __m256i e = _mm256_cvtps_epi32(x);
+  return _mm_packs_epi32(_mm256_castsi256_si128(e), _mm256_extracti128_si256(e, 1));  // 0..32767: no saturation
+}
+
+__attribute__((target("avx2"))) inline __m256i load256(const int16_t* p)
+{
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+}
+
+__attribute__((target("avx2"))) inline void pace256(const int16_t* from, int16_t* to, const int16_t* with_change,
+                                                     const int16_t* entry, int16_t* best, size_t i, __m256i keep)
+{
+  const __m256i path = _mm256_min_epi16(load256(from + i), load256(with_change + i));
+  const __m256i cost = _mm256_adds_epi16(load256(entry + i), _mm256_mulhrs_epi16(path, keep));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(to + i), cost);
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + i), _mm256_min_epi16(load256(best + i), cost));
+}
+}  // namespace
+
+__attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c)
+{
+  ChunkSums sums;
+  // Entry terms and sums, 16 places a vector; lanes past the chunk load as 0 and are not stored.
+  const uint32_t* own = c.raw + c.tolerance;
+  const __m512 scale = _mm512_set1_ps(c.entry_scale);
+  __m512i sum = _mm512_setzero_si512(), squares = _mm512_setzero_si512();
+  for (size_t i = 0; i < c.m; i += 16)
+  {
+    const __mmask16 mask = c.m - i >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << (c.m - i)) - 1);
+    const __m512i r = _mm512_maskz_loadu_epi32(mask, own + i);
+    __m512i nearest = r;
+    for (long k = 1; k <= c.tolerance; ++k)
+      nearest = _mm512_min_epu32(nearest, _mm512_min_epu32(_mm512_maskz_loadu_epi32(mask, own + i - k),
+                                                           _mm512_maskz_loadu_epi32(mask, own + i + k)));
+    const __m256i entry = entries512(nearest, scale);
+    const __m256i extra = _mm256_sub_epi16(entries512(r, scale), entry);
+    _mm512_mask_storeu_epi16(c.entry + i, __mmask32(mask), _mm512_castsi256_si512(entry));
+    _mm512_mask_storeu_epi16(c.extra + i, __mmask32(mask), _mm512_castsi256_si512(extra));
+    const __m512i low = _mm512_cvtepu32_epi64(_mm512_castsi512_si256(r));
+    const __m512i high = _mm512_cvtepu32_epi64(_mm512_extracti64x4_epi64(r, 1));
+    sum = _mm512_add_epi64(sum, _mm512_add_epi64(low, high));
+    squares = _mm512_add_epi64(squares, _mm512_add_epi64(_mm512_mul_epu32(low, low), _mm512_mul_epu32(high, high)));
+  }
+  sums.sum = static_cast<uint64_t>(_mm512_reduce_add_epi64(sum));
+  sums.squares = static_cast<uint64_t>(_mm512_reduce_add_epi64(squares));
+  // M' + change once per offset (several paces advance the same places this frame), then pace by pace over
+  // the chunk (one run of 64-byte lines of each row), in the order of memory.
+  const size_t m = c.m, whole = m - m % 32;
+  const __mmask32 top = __mmask32((1u << (m - whole)) - 1);
+  const __m512i change = _mm512_set1_epi16(c.change), keep = _mm512_set1_epi16(c.keep);
+  const __m512i highest = _mm512_set1_epi16(static_cast<int16_t>(kOne));
+  for (size_t u = 0; u < c.distinct; ++u)
+  {
+    const int16_t* old_best = c.old_best + static_cast<long>(c.begin) + c.offsets[u];
+    int16_t* with_change = c.with_change + u * c.stride;
+    for (size_t i = 0; i < whole; i += 32)
+      _mm512_storeu_si512(with_change + i, _mm512_adds_epi16(_mm512_loadu_si512(old_best + i), change));
+    if (top)
+      _mm512_mask_storeu_epi16(with_change + whole, top,
+                               _mm512_adds_epi16(_mm512_maskz_loadu_epi16(top, old_best + whole), change));
+  }
+  int16_t* best = c.smallest;
+  for (size_t i = 0; i < m; i += 32)
+    _mm512_storeu_si512(best + i, highest);
+  for (size_t v = 0; v < c.paces; ++v)
+  {
+    const PaceRow& row = c.rows[v];
+    const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
+    if (row.from == row.to)
+    {
+      forward512(row.to, -row.offset, with_change, c.entry, best, whole, top, keep);
+      continue;
+    }
+    // Reverse: the previous costs are in another buffer, read at or ahead of the place.
+    const int16_t* from = row.from + row.offset;
+    for (size_t i = 0; i < whole; i += 32)
+      pace512<false>(_mm512_loadu_si512(from + i), row.to, with_change, c.entry, best, i, ~__mmask32(0), keep);
+    if (top)
+      pace512<true>(_mm512_maskz_loadu_epi16(top, from + whole), row.to, with_change, c.entry, best, whole, top, keep);
+  }
+  __m512i minimum = highest;
+  int16_t* out = c.best + c.begin;
+  for (size_t i = 0; i < m; i += 32)
+  {
+    const __mmask32 mask = i < whole ? ~__mmask32(0) : top;
+    const __m512i value = _mm512_adds_epi16(_mm512_maskz_loadu_epi16(mask, best + i), _mm512_maskz_loadu_epi16(mask, c.extra + i));
+    _mm512_mask_storeu_epi16(out + i, mask, value);
+    minimum = _mm512_min_epi16(minimum, _mm512_mask_blend_epi16(mask, highest, value));
+  }
+  const __m512i low = _mm512_cvtepi16_epi32(_mm512_castsi512_si256(minimum));
+  const __m512i high = _mm512_cvtepi16_epi32(_mm512_extracti64x4_epi64(minimum, 1));
+  sums.minimum = static_cast<int16_t>(_mm512_reduce_min_epi32(_mm512_min_epi32(low, high)));
+  return sums;
+}
+
+__attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
+{
+  ChunkSums sums;
+  const uint32_t* own = c.raw + c.tolerance;
+  const __m256 scale = _mm256_set1_ps(c.entry_scale);
+  __m256i sum = _mm256_setzero_si256(), squares = _mm256_setzero_si256();
+  size_t i = 0;
+  for (; i + 8 <= c.m; i += 8)
+  {
+    const __m256i r = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i));
+    __m256i nearest = r;
+    for (long k = 1; k <= c.tolerance; ++k)
+      nearest = _mm256_min_epu32(
+          nearest, _mm256_min_epu32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i - k)),
+                                    _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i + k))));
+    const __m128i entry = entries256(nearest, scale);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(c.entry + i), entry);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(c.extra + i), _mm_sub_epi16(entries256(r, scale), entry));
+    const __m256i low = _mm256_cvtepu32_epi64(_mm256_castsi256_si128(r));
+    const __m256i high = _mm256_cvtepu32_epi64(_mm256_extracti128_si256(r, 1));
+    sum = _mm256_add_epi64(sum, _mm256_add_epi64(low, high));
+    squares = _mm256_add_epi64(squares, _mm256_add_epi64(_mm256_mul_epu32(low, low), _mm256_mul_epu32(high, high)));
+  }
+  alignas(32) uint64_t lanes[4];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), sum);
+  sums.sum = lanes[0] + lanes[1] + lanes[2] + lanes[3];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), squares);
+  sums.squares = lanes[0] + lanes[1] + lanes[2] + lanes[3];
+  for (; i < c.m; ++i)
+    prepare(c, i, sums);
+  // The partial block at the top place by place, then pace by pace over the whole blocks of 16, downwards.
+  const size_t whole = c.m - c.m % 16;
+  for (size_t k = c.m; k-- > whole;)
+    update(c, k, sums);
+  const __m256i change = _mm256_set1_epi16(c.change), keep = _mm256_set1_epi16(c.keep);
+  const __m256i highest = _mm256_set1_epi16(static_cast<int16_t>(kOne));
+  for (size_t u = 0; u < c.distinct; ++u)
+  {
+    const int16_t* old_best = c.old_best + static_cast<long>(c.begin) + c.offsets[u];
+    int16_t* with_change = c.with_change + u * c.stride;
+    for (size_t k = 0; k < whole; k += 16)
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(with_change + k),
+                          _mm256_adds_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(old_best + k)), change));
+  }
+  int16_t* best = c.smallest;
+  for (size_t k = 0; k < whole; k += 16)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + k), highest);
+  for (size_t v = 0; v < c.paces; ++v)
+  {
+    const int16_t* from = c.rows[v].from + c.rows[v].offset;
+    int16_t* to = c.rows[v].to;
+    const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
+    for (size_t k = whole; k > 0;)
+    {
+      k -= 16;
+      pace256(from, to, with_change, c.entry, best, k, keep);
+    }
+  }
+  __m256i minimum = highest;
+  int16_t* out = c.best + c.begin;
+  for (size_t k = 0; k < whole; k += 16)
+  {
+    const __m256i value = _mm256_adds_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(best + k)),
+                                            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.extra + k)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + k), value);
+    minimum = _mm256_min_epi16(minimum, value);
+  }
+  alignas(32) int16_t values[16];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(values), minimum);
+  for (int16_t x : values)
+    sums.minimum = std::min(sums.minimum, x);
+  return sums;
+}
+
+}  // namespace pace_kernels
+}  // namespace openable
+
+#pragma GCC diagnostic pop
+
+#endif  // x86

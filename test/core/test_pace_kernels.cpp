@@ -1,0 +1,209 @@
+// PaceMatcher's 16-bit fixed point: every kernel the CPU runs (portable, AVX2, AVX-512BW) against the same
+// recurrence written the plain way (whole rows, one place and pace at a time, no chunks, no padding, no in-place
+// update), to the last bit; across chunks of columns, a growing and an evicting reference, both directions and
+// every tolerance.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <random>
+
+#include "openable/matching/pace_matcher.h"
+
+using namespace openable;
+
+namespace
+{
+constexpr int32_t kOne = 32767;
+
+DescriptorLayout binaryLayout(int bits)
+{
+  DescriptorLayout layout;
+  layout.binary = true;
+  layout.cell_length = bits;
+  layout.cell_words = (bits + 63) / 64;
+  layout.cells = 1;
+  layout.blocks = 1;
+  return layout;
+}
+
+int16_t saturated(int32_t x)
+{
+  return static_cast<int16_t>(std::min(32767, std::max(-32768, x)));
+}
+
+/// The quantised recurrence of PaceMatcher (pace_matcher.h), place by place.
+class NaiveFixedPace
+{
+public:
+  NaiveFixedPace(const DescriptorLayout& layout, int L, std::vector<std::pair<int, int>> paces, float penalty,
+                 int tolerance)
+    : metric_(layout), keep_(1.0f - 1.0f / static_cast<float>(L)), paces_(std::move(paces)), penalty_(penalty),
+      tolerance_(tolerance)
+  {
+  }
+
+  void match(const uint64_t* query, const PlaceDatabase& reference, size_t n)
+  {
+    // Evicted places leave the front of the row.
+    const size_t gone = std::min<size_t>(reference.firstId() - first_id_, costs_.size());
+    costs_.erase(costs_.begin(), costs_.begin() + static_cast<long>(gone));
+    best_.erase(best_.begin(), best_.begin() + static_cast<long>(gone));
+    first_id_ = reference.firstId();
+    const bool first = t_ == 0;
+    const double max_distance = static_cast<double>(metric_.layout().maxFrameDistance());
+    std::vector<uint32_t> raw(n), nearest(n);
+    for (size_t j = 0; j < n; ++j)
+      raw[j] = metric_.distance(query, reference.descriptor(j));
+    for (size_t j = 0; j < n; ++j)
+    {
+      nearest[j] = raw[j];
+      for (int k = 1; k <= tolerance_; ++k)
+      {
+        if (j >= size_t(k))
+          nearest[j] = std::min(nearest[j], raw[j - k]);
+        if (j + k < n)
+          nearest[j] = std::min(nearest[j], raw[j + k]);
+      }
+    }
+    const float keep = first ? 0.0f : keep_;
+    const float change = keep > 0.0f ? penalty_ * spread_ * std::sqrt((1.0f - keep) / (1.0f + keep)) : 0.0f;
+    const int32_t a = std::min<int32_t>(32767, static_cast<int32_t>(std::lround(double(keep) * 32768.0)));
+    const float scale = static_cast<float>((32768.0 - a) / 32768.0 * kOne / max_distance);
+    const int32_t change_fixed = static_cast<int32_t>(std::min<double>(kOne, std::round(double(change) * kOne)));
+    const auto entry = [scale](uint32_t r)
+    { return static_cast<int32_t>(std::nearbyint(std::min(float(int32_t(r)) * scale, float(kOne)))); };
+    const auto oldCost = [&](long j, size_t v)
+    { return j >= 0 && j < long(costs_.size()) ? costs_[size_t(j)][v] : prior_; };
+    const auto oldBest = [&](long j) { return j >= 0 && j < long(best_.size()) ? best_[size_t(j)] : prior_; };
+    std::vector<std::vector<int16_t>> costs(n, std::vector<int16_t>(paces_.size()));
+    std::vector<int16_t> best(n);
+    for (size_t j = 0; j < n; ++j)
+    {
+      int16_t smallest = kOne;
+      for (size_t v = 0; v < paces_.size(); ++v)
+      {
+        const int p = paces_[v].first, q = paces_[v].second;
+        const long step = long((t_ + 1) * std::abs(p) / q) - long(t_ * std::abs(p) / q);
+        const long from = long(j) - (p > 0 ? step : -step);
+        const int32_t path = std::min<int32_t>(oldCost(from, v), saturated(oldBest(from) + change_fixed));
+        costs[j][v] = saturated(entry(nearest[j]) + ((path * a + 16384) >> 15));
+        smallest = std::min(smallest, costs[j][v]);
+      }
+      best[j] = saturated(smallest + entry(raw[j]) - entry(nearest[j]));
+    }
+    costs_ = costs;
+    best_ = best;
+    uint64_t sum = 0, squares = 0;
+    for (uint32_t r : raw)
+    {
+      sum += r;
+      squares += uint64_t(r) * r;
+    }
+    const double mean = double(sum) / double(n) / max_distance;
+    prior_ = static_cast<int16_t>(std::lround(std::min(1.0, mean) * kOne));
+    spread_ = static_cast<float>(
+        std::sqrt(std::max(0.0, double(squares) / double(n) / (max_distance * max_distance) - mean * mean)));
+    ++t_;
+  }
+  float best(size_t j) const
+  {
+    return static_cast<float>(best_[j]) / static_cast<float>(kOne);
+  }
+  /// The first pace with the smallest cost of place j.
+  size_t pace(size_t j) const
+  {
+    return size_t(std::min_element(costs_[j].begin(), costs_[j].end()) - costs_[j].begin());
+  }
+
+private:
+  FrameMetric metric_;
+  float keep_;
+  std::vector<std::pair<int, int>> paces_;
+  float penalty_;
+  int tolerance_;
+  std::vector<std::vector<int16_t>> costs_;
+  std::vector<int16_t> best_;
+  int16_t prior_ = 0;
+  float spread_ = 0.0f;
+  uint64_t t_ = 0;
+  uint64_t first_id_ = 0;
+};
+
+std::vector<uint64_t> randomDescriptor(std::mt19937_64& rng, int words)
+{
+  std::vector<uint64_t> d(static_cast<size_t>(words));
+  for (auto& w : d)
+    w = rng();
+  return d;
+}
+
+/// The query: a stored place now and then (so some paths are far better than the rest), noise otherwise.
+std::vector<uint64_t> queryAt(std::mt19937_64& rng, const PlaceDatabase& reference, int t)
+{
+  std::vector<uint64_t> q = randomDescriptor(rng, 2);
+  if (t % 3 != 0 && reference.size() > 40)
+  {
+    const uint64_t* place = reference.descriptor(reference.size() - 40 + size_t(t % 17));
+    q.assign(place, place + 2);
+    q[0] ^= rng() & rng() & rng();  // a few bits off
+  }
+  return q;
+}
+}  // namespace
+
+TEST(PaceKernels, EveryKernelEqualsTheFixedPointRecurrence)
+{
+  const DescriptorLayout layout = binaryLayout(128);
+  ASSERT_FALSE(supportedPaceKernels().empty());
+  for (PaceKernel kernel : supportedPaceKernels())
+    for (bool bidirectional : {false, true})
+      for (int tolerance : {0, 1, 2})
+        for (size_t capacity : {size_t(0), size_t(3000)})
+        {
+          const std::string what = paceKernelName(kernel) + (bidirectional ? " bidirectional" : " forward") +
+                                   " tolerance " + std::to_string(tolerance) + " capacity " +
+                                   std::to_string(capacity);
+          std::mt19937_64 rng(17 + tolerance);
+          PlaceDatabase reference(layout, capacity);
+          PaceOptions options;
+          options.kernel = kernel;
+          options.tolerance = tolerance;
+          options.max_pace = tolerance == 2 ? 2 : 3;
+          PaceMatcher matcher(layout, 7, bidirectional, options);
+          NaiveFixedPace naive(layout, 7, matcher.paces(), options.penalty, tolerance);
+          for (int t = 0; t < 45; ++t)
+          {
+            // 101 places a frame: rows cross the chunks of 2048 columns (twice), new places join every row, and
+            // past 3000 the oldest leave. Five stay out of the row (the exclusion window).
+            for (int k = 0; k < 101; ++k)
+              reference.add(randomDescriptor(rng, 2), FrameInfo());
+            const auto query = queryAt(rng, reference, t);
+            const size_t candidates = reference.size() - 5;
+            matcher.match(query.data(), reference, candidates);
+            naive.match(query.data(), reference, candidates);
+            ASSERT_EQ(matcher.columns(), candidates) << what;
+            for (size_t j = 0; j < candidates; ++j)
+            {
+              ASSERT_EQ(matcher.normalized(j), naive.best(j)) << what << ", frame " << t << ", column " << j;
+              const auto& slope = matcher.paces()[naive.pace(j)];
+              ASSERT_EQ(matcher.pace(j), float(std::abs(slope.first)) / float(slope.second))
+                  << what << ", frame " << t << ", column " << j;
+            }
+          }
+        }
+}
+
+TEST(PaceKernels, AKernelTheCpuLacksIsRefused)
+{
+  const auto supported = supportedPaceKernels();
+  EXPECT_EQ(supported.front(), PaceKernel::kPortable);
+  for (PaceKernel kernel : {PaceKernel::kAvx2, PaceKernel::kAvx512})
+    if (std::find(supported.begin(), supported.end(), kernel) == supported.end())
+    {
+      PaceOptions options;
+      options.kernel = kernel;
+      EXPECT_THROW(PaceMatcher(binaryLayout(128), 7, false, options), std::exception) << paceKernelName(kernel);
+    }
+}
