@@ -49,5 +49,11 @@ soak: build
 	$(WS)/devel/lib/openable_ros/openable_soak --max-history 0
 	$(WS)/devel/lib/openable_ros/openable_soak --max-history 10000
 
+# The nodes themselves over ROS: MonoDetector and PlaceServer, 100,000 frames, max_history 10,000, a private
+# roscore (scripts/node_soak.sh; README "Soak of the nodes"). A few minutes; not part of make test.
+.PHONY: node_soak
+node_soak: build
+	@bash scripts/node_soak.sh $(WS)
+
 clean:
 	rm -rf build

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "openable/description/input_contract.h"
 #include "openable/verification/geometric_verifier.h"
 #include "openable/detection/online_detector.h"
 #include "openable/map/place_database.h"
@@ -22,12 +23,14 @@ bool isSupportedEncoding(const std::string& encoding);
 const char* supportedEncodings();
 
 /// A camera image as the core wants it: 8-bit grey (mono8) or 8-bit BGR, shared with the message when
-/// possible (the result must not be modified). Returns false with `error` naming the encoding or size
-/// problem and what is expected. Never throws.
-bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::string& error);
+/// possible (the result must not be modified). Returns false with `problem` set: its reason ("empty image",
+/// "unsupported encoding", "image data too short", "cannot convert image": each counted and throttled on its
+/// own) and what was wrong and expected. Never throws.
+bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, openable::InputProblem& problem);
 
-/// A stereo_msgs/DisparityImage's image (32FC1) as CV_32F, shared with the message. Never throws.
-bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, std::string& error);
+/// A stereo_msgs/DisparityImage's image (32FC1) as CV_32F, shared with the message. Returns false with
+/// `problem` set ("unsupported disparity encoding", "malformed disparity"). Never throws.
+bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, openable::InputProblem& problem);
 
 /// A rectified camera from CameraInfo.P (and, for a stereo pair, the right camera's P: baseline).
 openable::PinholeCamera toPinholeCamera(const sensor_msgs::CameraInfo& left,

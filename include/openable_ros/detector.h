@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "openable/description/input_contract.h"
 #include "openable/detection/online_detector.h"
 #include "openable/node_support/sync_watch.h"
 #include "openable/node_support/throttle.h"
@@ -49,8 +50,11 @@ public:
 
   /// One synchronised input set. `topic` names the input in warnings and in the stored frame's source.
   void process(const std_msgs::Header& header, const std::string& topic, openable::FrameInput input);
-  /// Counts an input refused before the core saw it (bad encoding, size mismatch...) and warns, throttled.
+  /// Counts an input refused before the core saw it (size mismatch, uncalibrated camera...) under `reason`
+  /// and warns, throttled per reason.
   void reject(const std::string& reason, const std::string& message);
+  /// The same for an image the conversion refused (toCoreImage, toDisparity): its reason, "'topic': what".
+  void reject(const openable::InputProblem& problem, const std::string& topic);
   /// The camera for geometric verification (~verify), from camera_info.
   void setCamera(const openable::PinholeCamera& camera);
   /// Warns while synchronised inputs arrive without pairing up (or nothing ever arrives).
@@ -96,6 +100,9 @@ private:
   /// (Re)starts ~geo_file with its header: frame ids start again after a reset or a map load.
   void restartGeoFile();
   void warnThrottled(const std::string& key, double period, const std::string& message);
+  /// Every refusal goes here (mutex_ held): counted under `reason` (diagnostics `rejected: <reason>`) and
+  /// warned with the reason's own throttle, so one reason never silences another.
+  void refuse(const std::string& reason, const std::string& message);
 
   std::mutex mutex_;
   ros::NodeHandle nh_, pnh_;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "openable/detection/online_detector.h"
+#include "openable/node_support/refusal_log.h"
 #include "openable_ros/ros_parameters.h"
 
 namespace openable_ros
@@ -26,14 +27,14 @@ struct FrameCounters
   uint64_t dropped_queue = 0;
   uint64_t fixes = 0;            ///< usable ~fix messages
   uint64_t frames_with_fix = 0;  ///< stored frames that took a fix (written to ~geo_file when set)
-  std::map<std::string, uint64_t> rejected;      ///< by reason
+  /// Refused inputs: a count and a warning throttle per reason (counted and logged by Detector::refuse).
+  openable::RefusalLog refusals;
   std::map<std::string, uint64_t> statuses;      ///< frames per decision status
   std::map<std::string, uint64_t> verification;  ///< verifier outcomes ("accepted", "identical images", ...)
   double describe_ms_last = 0.0, describe_ms_total = 0.0;
   double match_ms_last = 0.0, match_ms_total = 0.0;
   uint64_t timed = 0;
 
-  uint64_t rejectedTotal() const;
   void addTimes(const openable::StageTimes& times);
 };
 

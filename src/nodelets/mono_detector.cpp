@@ -43,10 +43,10 @@ private:
   {
     detector_->noteInput(0, msg->header);
     openable::FrameInput input;
-    std::string error;
-    if (!toCoreImage(msg, input.image, error))
+    openable::InputProblem problem;
+    if (!toCoreImage(msg, input.image, problem))
     {
-      detector_->reject("bad image", "'" + image_sub_.getTopic() + "': " + error);
+      detector_->reject(problem, image_sub_.getTopic());
       return;
     }
     detector_->process(msg->header, image_sub_.getTopic(), std::move(input));

@@ -68,10 +68,10 @@ private:
   {
     detector_->noteInput(0, msg->header);
     openable::FrameInput input;
-    std::string error;
-    if (!toCoreImage(msg, input.image, error))
+    openable::InputProblem problem;
+    if (!toCoreImage(msg, input.image, problem))
     {
-      detector_->reject("bad image", "'" + subscribers_[0].getTopic() + "': " + error);
+      detector_->reject(problem, subscribers_[0].getTopic());
       return;
     }
     detector_->process(msg->header, subscribers_[0].getTopic(), std::move(input));
@@ -90,10 +90,10 @@ private:
     input.cameras.resize(set.size());
     for (size_t i = 0; i < set.size(); ++i)
     {
-      std::string error;
-      if (!toCoreImage(set[i], input.cameras[i], error))
+      openable::InputProblem problem;
+      if (!toCoreImage(set[i], input.cameras[i], problem))
       {
-        detector_->reject("bad image", "'" + subscribers_[i].getTopic() + "': " + error);
+        detector_->reject(problem, subscribers_[i].getTopic());
         return;
       }
     }

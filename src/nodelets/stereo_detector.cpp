@@ -149,15 +149,15 @@ private:
     detector_->noteSet();
     cv::Mat left;
     cv::Mat right;
-    std::string error;
-    if (!toCoreImage(left_msg, left, error))
+    openable::InputProblem problem;
+    if (!toCoreImage(left_msg, left, problem))
     {
-      detector_->reject("bad image", "'" + left_sub_.getTopic() + "': " + error);
+      detector_->reject(problem, left_sub_.getTopic());
       return;
     }
-    if (!toCoreImage(right_msg, right, error))
+    if (!toCoreImage(right_msg, right, problem))
     {
-      detector_->reject("bad image", "'" + right_sub_.getTopic() + "': " + error);
+      detector_->reject(problem, right_sub_.getTopic());
       return;
     }
     if (left.size() != right.size() || left.type() != right.type())
@@ -188,15 +188,15 @@ private:
     detector_->noteSet();
     cv::Mat left;
     cv::Mat raw;
-    std::string error;
-    if (!toCoreImage(left_msg, left, error))
+    openable::InputProblem problem;
+    if (!toCoreImage(left_msg, left, problem))
     {
-      detector_->reject("bad image", "'" + left_sub_.getTopic() + "': " + error);
+      detector_->reject(problem, left_sub_.getTopic());
       return;
     }
-    if (!toDisparity(disparity_msg->image, raw, error))
+    if (!toDisparity(disparity_msg->image, raw, problem))
     {
-      detector_->reject("bad disparity", "'" + disparity_sub_.getTopic() + "': " + error);
+      detector_->reject(problem, disparity_sub_.getTopic());
       return;
     }
     if (raw.size() != left.size())

@@ -24,22 +24,25 @@ const char* supportedEncodings()
   return "mono8, 8UC1, bgr8, rgb8, bgra8, rgba8, 8UC3, 8UC4 or mono16";
 }
 
-bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::string& error)
+bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, openable::InputProblem& problem)
 {
+  problem = openable::InputProblem();
   if (msg->width == 0 || msg->height == 0)
   {
-    error = "empty image (" + std::to_string(msg->width) + "x" + std::to_string(msg->height) + ")";
+    problem = {"empty image", "empty image (" + std::to_string(msg->width) + "x" + std::to_string(msg->height) + ")"};
     return false;
   }
   if (!isSupportedEncoding(msg->encoding))
   {
-    error = "encoding '" + msg->encoding + "' is not supported; expected " + supportedEncodings();
+    problem = {"unsupported encoding",
+               "encoding '" + msg->encoding + "' is not supported; expected " + supportedEncodings()};
     return false;
   }
   if (size_t(msg->step) * msg->height > msg->data.size())
   {
-    error = "image data holds " + std::to_string(msg->data.size()) +
-            " bytes, but step x height = " + std::to_string(size_t(msg->step) * msg->height);
+    problem = {"image data too short", "image data holds " + std::to_string(msg->data.size()) +
+                                           " bytes, but step x height = " +
+                                           std::to_string(size_t(msg->step) * msg->height)};
     return false;
   }
   try
@@ -76,29 +79,32 @@ bool toCoreImage(const sensor_msgs::ImageConstPtr& msg, cv::Mat& image, std::str
   }
   catch (const cv_bridge::Exception& e)
   {
-    error = std::string("cv_bridge could not convert it: ") + e.what();
+    problem = {"cannot convert image", std::string("cv_bridge could not convert it: ") + e.what()};
     return false;
   }
   catch (const cv::Exception& e)
   {
-    error = std::string("OpenCV could not convert it: ") + e.what();
+    problem = {"cannot convert image", std::string("OpenCV could not convert it: ") + e.what()};
     return false;
   }
   return true;
 }
 
-bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, std::string& error)
+bool toDisparity(const sensor_msgs::Image& msg, cv::Mat& disparity, openable::InputProblem& problem)
 {
+  problem = openable::InputProblem();
   if (msg.encoding != enc::TYPE_32FC1)
   {
-    error = "disparity encoding '" + msg.encoding + "' is not supported; expected 32FC1 (stereo_msgs/DisparityImage)";
+    problem = {"unsupported disparity encoding", "disparity encoding '" + msg.encoding +
+                                                     "' is not supported; expected 32FC1 (stereo_msgs/DisparityImage)"};
     return false;
   }
   if (msg.width == 0 || msg.height == 0 || size_t(msg.step) * msg.height > msg.data.size() ||
       msg.step < msg.width * sizeof(float))
   {
-    error = "disparity image of " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " with step " +
-            std::to_string(msg.step) + " and " + std::to_string(msg.data.size()) + " bytes is malformed";
+    problem = {"malformed disparity", "disparity image of " + std::to_string(msg.width) + "x" +
+                                          std::to_string(msg.height) + " with step " + std::to_string(msg.step) +
+                                          " and " + std::to_string(msg.data.size()) + " bytes is malformed"};
     return false;
   }
   // The message outlives this call (the caller holds it), so a header over its data is enough.

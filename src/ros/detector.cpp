@@ -3,6 +3,7 @@
 #include <cmath>
 #include <ctime>
 #include <fstream>
+#include <sstream>
 
 #include "openable/error.h"
 #include "openable/description/frame_describer.h"
@@ -143,12 +144,28 @@ void Detector::warnThrottled(const std::string& key, double period, const std::s
     ROS_WARN_STREAM_NAMED(name_, message);
 }
 
+void Detector::refuse(const std::string& reason, const std::string& message)
+{
+  uint64_t held_back = 0;
+  if (!counters_.refusals.note(reason, ros::WallTime::now().toSec(), held_back))
+    return;
+  std::ostringstream line;
+  line << message << " (frame skipped: " << reason << ")";
+  if (held_back > 0)
+    line << "; " << held_back << " more '" << reason << "' since the last such warning";
+  ROS_WARN_STREAM_NAMED(name_, line.str());
+}
+
 void Detector::reject(const std::string& reason, const std::string& message)
 {
   std::lock_guard<std::mutex> lock(mutex_);
   ++counters_.received;
-  ++counters_.rejected[reason];
-  warnThrottled("reject " + reason, kWarnPeriod, message + " (frame skipped)");
+  refuse(reason, message);
+}
+
+void Detector::reject(const openable::InputProblem& problem, const std::string& topic)
+{
+  reject(problem.reason, "'" + topic + "': " + problem.what);
 }
 
 void Detector::process(const std_msgs::Header& header, const std::string& topic, openable::FrameInput input)
@@ -174,28 +191,23 @@ void Detector::process(const std_msgs::Header& header, const std::string& topic,
   catch (const openable::FrameRefused& e)
   {
     // The input contract (openable/input_contract.h): each reason counted and throttled on its own.
-    ++counters_.rejected[e.reason()];
-    warnThrottled("refused " + e.reason(), kWarnPeriod,
-                  "'" + topic + "': " + e.what() + " (frame refused: " + e.reason() + ")");
+    refuse(e.reason(), "'" + topic + "': " + e.what());
     return;
   }
   catch (const openable::Error& e)
   {
-    ++counters_.rejected["cannot describe"];
-    warnThrottled("describe", kWarnPeriod, "'" + topic + "': " + e.what() + " (frame skipped)");
+    refuse("cannot describe", "'" + topic + "': " + e.what());
     return;
   }
   catch (const cv::Exception& e)
   {
-    ++counters_.rejected["OpenCV error"];
-    warnThrottled("opencv", kWarnPeriod, "'" + topic + "': OpenCV: " + e.what() + " (frame skipped)");
+    refuse("OpenCV error", "'" + topic + "': OpenCV: " + e.what());
     return;
   }
   catch (const std::exception& e)
   {
     // Anything else from the core must not unwind into the nodelet manager either.
-    ++counters_.rejected["unexpected error"];
-    warnThrottled("exception", kWarnPeriod, "'" + topic + "': " + e.what() + " (frame skipped)");
+    refuse("unexpected error", "'" + topic + "': " + e.what());
     return;
   }
   publish(header, outcome);
@@ -251,12 +263,11 @@ bool Detector::acceptStamp(const std_msgs::Header& header, const std::string& to
   what << "'" << topic << "': stamp " << header.stamp << " is before the previous frame's; expected increasing stamps";
   if (!parameters_.reset_on_time_jump)
   {
-    ++counters_.rejected["stamp went backwards"];
-    warnThrottled("time jump", kWarnPeriod,
-                  what.str() + "; frame skipped, history kept (set ~reset_on_time_jump to start over instead)");
+    refuse("stamp went backwards",
+           what.str() + "; history kept (set ~reset_on_time_jump to start over instead)");
     return false;
   }
-  warnThrottled("time jump", kWarnPeriod,
+  warnThrottled("time jump reset", kWarnPeriod,
                 what.str() + " (a bag restarted?): ~reset_on_time_jump is true, resetting the history");
   resetLocked();
   poses_->clear();

@@ -4,14 +4,6 @@
 
 namespace openable_ros
 {
-uint64_t FrameCounters::rejectedTotal() const
-{
-  uint64_t total = 0;
-  for (const auto& r : rejected)
-    total += r.second;
-  return total;
-}
-
 void FrameCounters::addTimes(const openable::StageTimes& times)
 {
   describe_ms_last = times.preprocess_ms + times.describe_ms;
@@ -28,7 +20,7 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   const ros::WallTime now = ros::WallTime::now();
   const double elapsed = std::max(1e-6, (now - last_).toSec());
   const double rate = double(counters.received - received_at_last_) / elapsed;
-  const uint64_t rejected_total = counters.rejectedTotal();
+  const uint64_t rejected_total = counters.refusals.total();
   const uint64_t rejected_recently = rejected_total - rejected_at_last_;
   const uint64_t dropped_recently = counters.dropped_queue - dropped_at_last_;
   dropped_at_last_ = counters.dropped_queue;
@@ -54,7 +46,7 @@ void DetectorDiagnostics::fill(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("frames stored", counters.stored);
   status.add("frames skipped (not a keyframe)", counters.skipped_keyframe);
   status.add("frames rejected", rejected_total);
-  for (const auto& r : counters.rejected)
+  for (const auto& r : counters.refusals.counts())
     status.add("rejected: " + r.first, r.second);
   status.add("frames dropped by the synchroniser", counters.dropped_by_synchroniser);
   // Gaps in the inputs' header.seq: messages published that never reached a callback (a full queue).

@@ -396,3 +396,6 @@ INSTANTIATE_TEST_SUITE_P(Descriptors, EveryDescriptor, ::testing::ValuesIn(kMono
                          [](const ::testing::TestParamInfo<std::string>& info)
                          {
                            std::string name = info.param;
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });

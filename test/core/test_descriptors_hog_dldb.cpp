@@ -215,6 +215,3 @@ TEST(Dldb, EurocRevisitIsTheNearestPair)
 }
 
 // HOG-B becomes HOG_B: gtest names allow letters, digits and underscores only.
-                           std::replace(name.begin(), name.end(), '-', '_');
-                           return name;
-                         });

@@ -9,7 +9,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 out=$root/build/fuzz
 seconds=${FUZZ_SECONDS:-60}
 jobs=${JOBS:-1}
-targets=${FUZZ_TARGETS:-map_loader config_yaml npy}
+targets=${FUZZ_TARGETS:-map_loader config_yaml npy place_messages detector_image}
 
 cmake -S "$root/test/fuzz" -B "$out/build" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build "$out/build" -j "$jobs" -- --no-print-directory

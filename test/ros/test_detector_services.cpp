@@ -1,16 +1,19 @@
 // Checker for the services and for bad input, against the mono nodelet: ~save_map / ~load_map / ~reset
 // round trip, corrupt and incompatible maps refused with the node still serving, unsupported encodings,
-// empty images and stamps going backwards skipped without losing the history.
+// empty images and stamps going backwards skipped without losing the history, each counted and warned
+// under its own reason (read back from /diagnostics and /rosout).
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <gtest/gtest.h>
 #include <openable_ros/LoadMap.h>
 #include <openable_ros/LoopClosure.h>
 #include <openable_ros/SaveMap.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <std_srvs/Trigger.h>
 
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <vector>
 
@@ -40,6 +43,7 @@ protected:
     diagnostics_ = std::make_unique<DiagnosticsWatcher>(nh_);
     image_pub_ = nh_.advertise<sensor_msgs::Image>("image", 50);
     loop_sub_ = nh_.subscribe("loop_closures", 1000, &DetectorServices::loopCallback, this);
+    rosout_sub_ = nh_.subscribe("/rosout", 1000, &DetectorServices::logCallback, this);
     ASSERT_TRUE(waitFor([&] { return image_pub_.getNumSubscribers() > 0 && loop_sub_.getNumPublishers() > 0; }, 30.0))
         << "the detector did not connect within 30 s";
     ASSERT_TRUE(ros::service::waitForService(detector_ + "/save_map", ros::Duration(30.0)));
@@ -51,6 +55,22 @@ protected:
   {
     std::lock_guard<std::mutex> lock(mutex_);
     loops_.push_back(msg);
+  }
+  /// The detector's refusal warnings ("... (frame skipped: <reason>)..."), counted by reason.
+  void logCallback(const rosgraph_msgs::LogConstPtr& msg)
+  {
+    const std::string tag = "(frame skipped: ";
+    const size_t at = msg->msg.find(tag);
+    if (msg->level != rosgraph_msgs::Log::WARN || at == std::string::npos)
+      return;
+    const size_t end = msg->msg.find(')', at);
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++warned_[msg->msg.substr(at + tag.size(), end - at - tag.size())];
+  }
+  std::map<std::string, int> warned()
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return warned_;
   }
   size_t loopCount()
   {
@@ -107,8 +127,10 @@ protected:
   std::unique_ptr<DiagnosticsWatcher> diagnostics_;
   ros::Publisher image_pub_;
   ros::Subscriber loop_sub_;
+  ros::Subscriber rosout_sub_;
   std::mutex mutex_;
   std::vector<openable_ros::LoopClosureConstPtr> loops_;
+  std::map<std::string, int> warned_;
 };
 }  // namespace
 
@@ -124,13 +146,28 @@ TEST_F(DetectorServices, BadInputIsSkippedAndTheNodeKeepsRunning)
   empty->header.stamp = nextStamp();
   empty->encoding = enc::BGR8;
   publish(empty);
-  ASSERT_TRUE(waitForValue("rejected: bad image", 3)) << "rejected: " << diagnostics_->value("rejected: bad image");
+  // Issue 22 finding 6: each reason its own count and its own warning (they shared one "bad image" before).
+  ASSERT_TRUE(waitForValue("rejected: unsupported encoding", 2))
+      << "rejected: " << diagnostics_->value("rejected: unsupported encoding");
+  ASSERT_TRUE(waitForValue("rejected: empty image", 1)) << diagnostics_->value("rejected: empty image");
 
   // A stamp going backwards: skipped, history kept (~reset_on_time_jump false by default).
   const cv::Mat image = dayImage(10);
   publish(openable_ros_test::toMsg(image, enc::BGR8, ros::Time(50.0)));
   ASSERT_TRUE(waitForValue("rejected: stamp went backwards", 1));
   EXPECT_EQ(diagnostics_->number("history size"), 10);
+  EXPECT_EQ(diagnostics_->number("frames rejected"), 4);
+  // One warning per reason within the throttle's 5 s: the second unsupported encoding is held back, no
+  // reason hides another.
+  const std::map<std::string, int> expected = {
+      {"unsupported encoding", 1}, {"empty image", 1}, {"stamp went backwards", 1}};
+  EXPECT_TRUE(waitFor([&] { return warned() == expected; }, 5.0)) << [&]
+  {
+    std::string seen;
+    for (const auto& w : warned())
+      seen += w.first + " x" + std::to_string(w.second) + "; ";
+    return "warnings seen: " + seen;
+  }();
 
   // Still running: the next good frames are stored.
   publishDay(10, 5);

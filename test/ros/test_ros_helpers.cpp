@@ -4,11 +4,18 @@
 #include <sensor_msgs/image_encodings.h>
 
 #include <boost/make_shared.hpp>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <set>
 #include <fstream>
 #include <regex>
 #include <string>
 
 #include "openable/config.h"
+#include "openable/description/input_contract.h"
+#include "openable/detection/online_detector.h"
+#include "openable/node_support/refusal_log.h"
 #include "openable_ros/DetectorConfig.h"
 #include "openable_ros/conversions.h"
 #include "openable_ros/params.h"
@@ -119,9 +126,11 @@ TEST(Conversions, EveryEncodingIsConvertedOrRefusedWithAReason)
   for (const auto& c : cases)
   {
     cv::Mat out;
-    std::string error;
-    const bool ok = openable_ros::toCoreImage(image(c.encoding, 0, c.bytes_per_pixel), out, error);
+    openable::InputProblem problem;
+    const bool ok = openable_ros::toCoreImage(image(c.encoding, 0, c.bytes_per_pixel), out, problem);
+    const std::string& error = problem.what;
     EXPECT_EQ(ok, c.accepted) << c.encoding << ": " << error;
+    EXPECT_EQ(ok, problem.ok()) << c.encoding;
     if (ok)
     {
       EXPECT_EQ(out.channels(), c.channels) << c.encoding;
@@ -131,15 +140,146 @@ TEST(Conversions, EveryEncodingIsConvertedOrRefusedWithAReason)
     else
     {
       EXPECT_NE(error.find(c.encoding), std::string::npos) << "the reason names the encoding: " << error;
+      EXPECT_EQ(problem.reason, "unsupported encoding");
     }
   }
   // Too little data for the stated size.
   auto short_msg = image(enc::MONO8, 0, 1);
   short_msg->data.resize(3);
   cv::Mat out;
-  std::string error;
-  EXPECT_FALSE(openable_ros::toCoreImage(short_msg, out, error));
-  EXPECT_FALSE(error.empty());
+  openable::InputProblem problem;
+  EXPECT_FALSE(openable_ros::toCoreImage(short_msg, out, problem));
+  EXPECT_EQ(problem.reason, "image data too short");
+  EXPECT_FALSE(problem.what.empty());
+}
+
+/// A real Gardens Point frame (data/sample) as a sensor_msgs/Image of `encoding` (mono8 or 16UC1).
+sensor_msgs::ImagePtr realImage(const std::string& encoding)
+{
+  const cv::Mat frame = cv::imread(std::string(OPENABLE_SOURCE_DIR) + "/data/sample/day_right/Image010.jpg",
+                                   cv::IMREAD_GRAYSCALE);
+  auto msg = boost::make_shared<sensor_msgs::Image>();
+  msg->encoding = encoding;
+  msg->width = uint32_t(frame.cols);
+  msg->height = uint32_t(frame.rows);
+  const size_t bytes = encoding == enc::TYPE_16UC1 ? 2 : 1;
+  msg->step = uint32_t(frame.cols * bytes);
+  msg->data.assign(msg->step * msg->height, 0);
+  for (int r = 0; r < frame.rows; ++r)
+    for (int c = 0; c < frame.cols; ++c)
+      msg->data[size_t(r) * msg->step + size_t(c) * bytes] = frame.at<uint8_t>(r, c);
+  return msg;
+}
+
+/// The reason the core refuses `input` with, "" when it does not.
+std::string coreRefusal(openable::OnlineDetector& detector, const openable::FrameInput& input)
+{
+  try
+  {
+    const openable::FrameOutcome outcome = detector.process(input);
+    // A stamp before the previous frame's is an outcome, refused by the nodelet (Detector::acceptStamp).
+    return outcome.status == openable::FrameStatus::TimeJump ? "stamp went backwards" : "";
+  }
+  catch (const openable::FrameRefused& e)
+  {
+    return e.reason();
+  }
+}
+
+// Issue 22 finding 6: "all bad-image reasons share one warning throttle: 11 refusals in a few seconds gave 3
+// log lines". The same kind of burst on real frames: 11 refusals of 9 reasons within 3.3 s, from the ROS
+// conversion (toCoreImage) and from the core (OnlineDetector with the nodelets' options), go through the
+// RefusalLog the Detector keeps: one warning per reason, one count per reason. Before, toCoreImage gave a
+// text only and the nodelets counted and throttled all of its refusals as one "bad image".
+TEST(Refusals, EachReasonHasItsOwnWarningAndCount)
+{
+  std::vector<std::string> reasons;
+  auto converted = [&reasons](const sensor_msgs::ImageConstPtr& msg)
+  {
+    cv::Mat out;
+    openable::InputProblem problem;
+    EXPECT_FALSE(openable_ros::toCoreImage(msg, out, problem)) << msg->encoding;
+    reasons.push_back(problem.reason);
+  };
+  auto empty = realImage(enc::MONO8);
+  empty->width = 0;
+  empty->height = 0;
+  empty->data.clear();
+  converted(empty);
+  converted(realImage(enc::TYPE_16UC1));  // a depth image on the camera topic
+  auto float_image = realImage(enc::TYPE_16UC1);
+  float_image->encoding = enc::TYPE_32FC1;
+  converted(float_image);
+  auto truncated = realImage(enc::MONO8);
+  truncated->data.resize(truncated->data.size() / 2);
+  converted(truncated);
+
+  openable::OnlineOptions options;
+  options.require_stamps = true;  // as the nodelets run it
+  openable::OnlineDetector detector(
+      openable::Config::fromYamlFile(std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml"), options);
+  cv::Mat frame;
+  openable::InputProblem problem;
+  ASSERT_TRUE(openable_ros::toCoreImage(realImage(enc::MONO8), frame, problem)) << problem.what;
+  auto input = [&frame](double stamp)
+  {
+    openable::FrameInput in;
+    in.image = frame;
+    in.stamp = stamp;
+    return in;
+  };
+  ASSERT_EQ(coreRefusal(detector, input(100.0)), "");  // a good frame first
+  reasons.push_back(coreRefusal(detector, input(0.0)));
+  reasons.push_back(coreRefusal(detector, input(50.0)));
+  openable::FrameInput strip = input(101.0);
+  strip.image = cv::Mat(1, 100000, CV_8UC1, cv::Scalar(128));
+  reasons.push_back(coreRefusal(detector, strip));
+  strip.image = cv::Mat(1, 1, CV_8UC1, cv::Scalar(128));
+  reasons.push_back(coreRefusal(detector, strip));
+  openable::FrameInput black = input(102.0);
+  black.image = cv::Mat::zeros(frame.size(), CV_8UC1);
+  reasons.push_back(coreRefusal(detector, black));
+  openable::FrameInput posed = input(103.0);
+  posed.has_pose = true;
+  posed.pose[0] = std::numeric_limits<double>::quiet_NaN();
+  reasons.push_back(coreRefusal(detector, posed));
+  posed.pose = {{0, 0, 0, 0, 0, 0, 0}};
+  reasons.push_back(coreRefusal(detector, posed));
+
+  ASSERT_EQ(reasons.size(), 11u);
+  const std::vector<std::string> expected = {
+      "empty image",          "unsupported encoding", "unsupported encoding", "image data too short",
+      "stamp 0",              "stamp went backwards", "image too small",      "image too small",
+      "no texture",           "pose not finite",      "zero quaternion"};
+  EXPECT_EQ(reasons, expected);
+
+  openable::RefusalLog log(5.0);
+  std::set<std::string> warned;
+  size_t lines = 0;
+  for (size_t i = 0; i < reasons.size(); ++i)
+  {
+    uint64_t held_back = 0;
+    if (log.note(reasons[i], 0.3 * double(i), held_back))
+    {
+      ++lines;
+      EXPECT_TRUE(warned.insert(reasons[i]).second) << "warned twice within the period: " << reasons[i];
+      EXPECT_EQ(held_back, 0u);
+    }
+  }
+  EXPECT_EQ(lines, 9u) << "one warning per reason, none hidden by another reason's";
+  EXPECT_EQ(warned, std::set<std::string>(expected.begin(), expected.end()));
+  EXPECT_EQ(log.total(), 11u);
+  EXPECT_EQ(log.counts().size(), 9u);
+  EXPECT_EQ(log.counts().at("unsupported encoding"), 2u);
+  EXPECT_EQ(log.counts().at("image too small"), 2u);
+  EXPECT_EQ(log.counts().at("no texture"), 1u);
+
+  // A reason that keeps coming back is warned again after the period, with what it held back.
+  uint64_t held_back = 0;
+  EXPECT_FALSE(log.note("unsupported encoding", 4.0, held_back));
+  EXPECT_TRUE(log.note("unsupported encoding", 6.0, held_back));
+  EXPECT_EQ(held_back, 2u);  // the one at 0.6 s and the one at 4.0 s
+  EXPECT_EQ(log.counts().at("unsupported encoding"), 4u);
 }
 
 TEST(LiveReconfigure, LiveCoreKeysGoBothWaysByName)
@@ -175,8 +315,8 @@ TEST(Conversions, Mono16InEitherByteOrderKeepsItsTopByte)
       msg->data[i + 1] = big_endian ? 0x34 : 0x12;
     }
     cv::Mat out;
-    std::string error;
-    ASSERT_TRUE(openable_ros::toCoreImage(msg, out, error)) << error;
+    openable::InputProblem problem;
+    ASSERT_TRUE(openable_ros::toCoreImage(msg, out, problem)) << problem.what;
     EXPECT_EQ(out.at<uint8_t>(2, 3), 0x12) << (big_endian ? "big" : "little") << "-endian";
   }
 }
