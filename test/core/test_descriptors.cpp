@@ -392,6 +392,7 @@ TEST_P(EveryDescriptor, DescribesIlluminationInvariantPatches)
   EXPECT_GT(da.distance(describe(*extractor, b)), 0.05) << GetParam();
 }
 
+// HOG-B becomes HOG_B: gtest names allow letters, digits and underscores only.
 INSTANTIATE_TEST_SUITE_P(Descriptors, EveryDescriptor, ::testing::ValuesIn(kMonoNames),
                          [](const ::testing::TestParamInfo<std::string>& info)
                          {

@@ -213,5 +213,3 @@ TEST(Dldb, EurocRevisitIsTheNearestPair)
   EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[2]));
   EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[3]));
 }
-
-// HOG-B becomes HOG_B: gtest names allow letters, digits and underscores only.
