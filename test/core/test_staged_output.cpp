@@ -18,6 +18,7 @@
 #include "openable/error.h"
 #include "openable/io/staged_output.h"
 #include "output_set_files.h"
+#include "staged_output_kills.h"
 
 namespace fs = std::filesystem;
 
@@ -27,48 +28,10 @@ using openable_test::Files;
 using openable_test::leftovers;
 using openable_test::readText;
 using openable_test::visible;
-
-const Files kOld = {{"a.csv", "old a\n"}, {"b.png", std::string(3000, 'o')}, {"only_old.txt", "old\n"}};
-const Files kNew = {{"a.csv", "new a\n"}, {"b.png", std::string(5000, 'n')}, {"only_new.txt", "new\n"}};
-
-void writeSet(const fs::path& dir, const Files& files)
-{
-  openable::StagedOutput output(dir.string(), "test_set");
-  for (const auto& [name, text] : files)
-    openable::writeFileAtomically(output.path(name), text);
-  output.publish();
-}
-
-int kill_at = 0;
-void killAtStep(const char*)
-{
-  if (--kill_at == 0)
-    ::raise(SIGKILL);
-}
-
-/// Forks a child that writes kNew over `dir` and is killed at its `step`-th step; true when it was killed.
-bool killedWriting(const fs::path& dir, int step)
-{
-  const pid_t child = ::fork();
-  if (child == 0)
-  {
-    kill_at = step;
-    openable::setOutputStepHook(killAtStep);
-    try
-    {
-      writeSet(dir, kNew);
-    }
-    catch (...)
-    {
-      ::_exit(3);
-    }
-    ::_exit(0);
-  }
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  EXPECT_TRUE(WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) == 0)) << "step " << step;
-  return WIFSIGNALED(status);
-}
+using openable_test::kNew;
+using openable_test::kOld;
+using openable_test::killedAt;
+using openable_test::writeSet;
 
 class StagedOutputTest : public ::testing::Test
 {
@@ -98,7 +61,7 @@ protected:
       if (shared)
         std::ofstream(dir_ / "user.txt") << "the user's\n";
       writeSet(dir_, kOld);
-      if (!killedWriting(dir_, step))
+      if (!killedAt(step, [this] { writeSet(dir_, kNew); }))
       {
         EXPECT_EQ(visible(dir_, {"user.txt"}), kNew);
         break;
@@ -243,17 +206,7 @@ TEST_F(StagedOutputTest, AKilledSingleFileWriteLeavesTheOldFileAndNoTemporaryAft
   for (int step = 1; step < 10; ++step)
   {
     openable::writeFileAtomically(file.string(), "old map");
-    const pid_t child = ::fork();
-    if (child == 0)
-    {
-      kill_at = step;
-      openable::setOutputStepHook(killAtStep);
-      openable::writeFileAtomically(file.string(), "new map");
-      ::_exit(0);
-    }
-    int status = 0;
-    ::waitpid(child, &status, 0);
-    if (!WIFSIGNALED(status))
+    if (!killedAt(step, [&file] { openable::writeFileAtomically(file.string(), "new map"); }))
       break;
     ++kills;
     const std::string seen = readText(file);

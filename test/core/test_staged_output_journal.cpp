@@ -17,58 +17,22 @@
 #include "openable/io/atomic_file.h"
 #include "openable/io/staged_output.h"
 #include "output_set_files.h"
+#include "staged_output_kills.h"
 
 namespace fs = std::filesystem;
 using openable_test::Files;
 using openable_test::leftovers;
 using openable_test::readText;
 using openable_test::visible;
+using openable_test::kNew;
+using openable_test::kOld;
+using openable_test::killedAt;
+using openable_test::writeSet;
 
 namespace
 {
-const Files kOld = {{"a.csv", "old a\n"}, {"b.png", std::string(3000, 'o')}, {"only_old.txt", "old\n"}};
-const Files kNew = {{"a.csv", "new a\n"}, {"b.png", std::string(5000, 'n')}, {"only_new.txt", "new\n"}};
 const Files kOther = {{"metrics.json", "{}\n"}, {"pr_curve.csv", "p,r\n"}};
 const char kUser[] = "user.txt";
-
-void writeSet(const fs::path& dir, const Files& files, const std::string& set)
-{
-  openable::StagedOutput output(dir.string(), set);
-  for (const auto& [name, text] : files)
-    openable::writeFileAtomically(output.path(name), text);
-  output.publish();
-}
-
-int kill_at = 0;
-void killAtStep(const char*)
-{
-  if (--kill_at == 0)
-    ::raise(SIGKILL);
-}
-
-/// Runs `work` in a child killed at its `step`-th output step; true when it was killed.
-bool killedAt(int step, const std::function<void()>& work)
-{
-  const pid_t child = ::fork();
-  if (child == 0)
-  {
-    kill_at = step;
-    openable::setOutputStepHook(killAtStep);
-    try
-    {
-      work();
-    }
-    catch (...)
-    {
-      ::_exit(3);
-    }
-    ::_exit(0);
-  }
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  EXPECT_TRUE(WIFSIGNALED(status) || (WIFEXITED(status) && WEXITSTATUS(status) == 0)) << "step " << step;
-  return WIFSIGNALED(status);
-}
 
 bool hasCommit(const fs::path& dir)
 {
