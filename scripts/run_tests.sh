@@ -35,6 +35,15 @@ if [ $run_rc -ne 0 ] && [ $failed -eq 0 ]; then
   failed=1
 fi
 
+# The checks below are one test each, added to catkin_test_results' counts: `count_check RC` after each.
+count_check() {
+  tests=$((tests + 1))
+  if [ "$1" -ne 0 ]; then
+    failures=$((failures + 1))
+    failed=$((failed + 1))
+  fi
+}
+
 # One more test: the numbers README.md, doc/ros_api.md and doc/kitti.md quote from runs against this run's:
 # the properties the tests recorded in their results, the demo's output and what kitti.launch decides on a
 # 160-frame KITTI bag (scripts/kitti_short_bag.sh, as shipped and with exclusion_window:=20); the check is
@@ -53,13 +62,11 @@ docs_log=$root/build/doc_numbers.log
       "$root/README.md" "$root/doc/ros_api.md" "$root/doc/kitti.md"
 } > "$docs_log" 2>&1
 docs_rc=$?
-tests=$((tests + 1))
+count_check $docs_rc
 if [ $docs_rc -eq 0 ]; then
   tail -n 1 "$docs_log"
 else
   tail -n 40 "$docs_log"
-  failures=$((failures + 1))
-  failed=$((failed + 1))
 fi
 
 # One more test where an aarch64 compiler is installed (install_deps.sh): the Hamming kernels and their test
@@ -69,23 +76,18 @@ if command -v aarch64-linux-gnu-g++ > /dev/null || [ "$(uname -m)" = aarch64 ]; 
   bash "$root/scripts/cross_check_aarch64.sh" > "$cross_log" 2>&1
   cross_rc=$?
   if [ $cross_rc -ne 77 ]; then
-    tests=$((tests + 1))
+    count_check $cross_rc
     if [ $cross_rc -eq 0 ]; then
       tail -n 1 "$cross_log"
     else
       tail -n 20 "$cross_log"
-      failures=$((failures + 1))
-      failed=$((failed + 1))
     fi
   fi
 fi
 
 # One more test: no header outside the C/C++ library, OpenCV, yaml-cpp, Eigen, Ceres and the core's own
 # reached the core's objects (ROS's headers share /usr/include on Debian, so no include path can keep them out).
-tests=$((tests + 1))
-if ! python3 "$root/scripts/check_core_ros_free.py" "$PWD"; then
-  failures=$((failures + 1))
-  failed=$((failed + 1))
-fi
+python3 "$root/scripts/check_core_ros_free.py" "$PWD"
+count_check $?
 echo "$((tests - errors - failures)) passed, $failed failed"
 [ $failed -eq 0 ] && [ $results_rc -eq 0 ]

@@ -105,13 +105,6 @@ private:
   uint64_t t_ = 0;
 };
 
-std::vector<uint64_t> randomDescriptor(std::mt19937_64& rng, int words)
-{
-  std::vector<uint64_t> d(static_cast<size_t>(words));
-  for (auto& w : d)
-    w = rng();
-  return d;
-}
 }  // namespace
 
 // The matcher computes this recurrence in 16-bit fixed point (test_pace_kernels checks it to the bit): each frame
@@ -130,8 +123,8 @@ TEST(PaceMatcher, StaysWithinItsRoundingOfTheFloatRecurrenceAcrossChunksGrowthAn
     {
       // The reference grows by 23 places a frame: new places join each row (test_pace_kernels crosses chunks).
       for (int k = 0; k < 23; ++k)
-        reference.add(randomDescriptor(rng, 2), FrameInfo());
-      const auto query = randomDescriptor(rng, 2);
+        reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+      const auto query = openable_test::randomWords(rng, 2);
       const size_t candidates = reference.size() - 5;
       matcher.match(query.data(), reference, candidates);
       naive.match(query.data(), reference, candidates);
@@ -168,7 +161,7 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
   std::vector<std::vector<uint64_t>> places;
   for (int j = 0; j < 200; ++j)
   {
-    places.push_back(randomDescriptor(rng, 4));
+    places.push_back(openable_test::randomWords(rng, 4));
     reference.add(places.back(), FrameInfo());
   }
   PaceMatcher matcher(layout, 10, false, PaceOptions());
@@ -180,7 +173,9 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
     std::vector<size_t> best;
     matcher.smallestDistinct(2, 10, 1, best);
     if (j >= 40)
+    {
       EXPECT_NEAR(static_cast<double>(best.at(0)), j, 1.0) << "revisit of place " << j;
+    }
   }
   PaceOptions bad;
   bad.max_pace = 0;

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "openable/matching/pace_matcher.h"
+#include "bit_oracle.h"  // randomWords
 
 using namespace openable;
 
@@ -131,18 +132,11 @@ private:
   uint64_t first_id_ = 0;
 };
 
-std::vector<uint64_t> randomDescriptor(std::mt19937_64& rng, int words)
-{
-  std::vector<uint64_t> d(static_cast<size_t>(words));
-  for (auto& w : d)
-    w = rng();
-  return d;
-}
 
 /// The query: a stored place now and then (so some paths are far better than the rest), noise otherwise.
 std::vector<uint64_t> queryAt(std::mt19937_64& rng, const PlaceDatabase& reference, int t)
 {
-  std::vector<uint64_t> q = randomDescriptor(rng, 2);
+  std::vector<uint64_t> q = openable_test::randomWords(rng, 2);
   if (t % 3 != 0 && reference.size() > 40)
   {
     const uint64_t* place = reference.descriptor(reference.size() - 40 + size_t(t % 17));
@@ -178,7 +172,7 @@ TEST(PaceKernels, EveryKernelEqualsTheFixedPointRecurrence)
             // 101 places a frame: rows cross the chunks of 2048 columns (twice), new places join every row, and
             // past 3000 the oldest leave. Five stay out of the row (the exclusion window).
             for (int k = 0; k < 101; ++k)
-              reference.add(randomDescriptor(rng, 2), FrameInfo());
+              reference.add(openable_test::randomWords(rng, 2), FrameInfo());
             const auto query = queryAt(rng, reference, t);
             const size_t candidates = reference.size() - 5;
             matcher.match(query.data(), reference, candidates);

@@ -24,14 +24,7 @@ namespace fs = std::filesystem;
 
 namespace
 {
-using openable_test::Files;
-using openable_test::leftovers;
-using openable_test::readText;
-using openable_test::visible;
-using openable_test::kNew;
-using openable_test::kOld;
-using openable_test::killedAt;
-using openable_test::writeSet;
+using namespace openable_test;  // Files, readText, visible, leftovers, kOld, kNew, writeSet, killedAt
 
 class StagedOutputTest : public ::testing::Test
 {

@@ -9,6 +9,7 @@
 #include "openable/config.h"
 #include "openable/descriptors/descriptor_extractor.h"
 #include "openable/descriptors/descriptor_layout.h"
+#include "openable/descriptors/descriptor_registry.h"
 #include "openable/description/preprocessor.h"
 
 namespace openable
@@ -42,6 +43,11 @@ public:
   {
     return *extractor_;
   }
+  /// The descriptor's registry row (descriptor_registry.h): whether it needs disparity, its form, length.
+  const DescriptorInfo& descriptor() const
+  {
+    return *row_;
+  }
 
   /// Describes patches as returned by the preprocessor (exactly layout().cells of them).
   FrameDescriptor describe(const std::vector<Patch>& patches) const;
@@ -53,6 +59,7 @@ public:
 private:
   Config config_;
   Preprocessor preprocessor_;
+  const DescriptorInfo* row_;
   DescriptorLayout layout_;
   std::unique_ptr<DescriptorExtractor> extractor_;
 };

@@ -53,6 +53,11 @@ public:
   /// Shorthand: Preprocessor(PreprocessOptions::from(config)).
   explicit Preprocessor(const Config& config);
 
+  const PreprocessOptions& options() const
+  {
+    return options_;
+  }
+
   /// Cells across and down the whole image (panoramas * grid_x, grid_y).
   int cellsAcross() const;
   int cellsDown() const;

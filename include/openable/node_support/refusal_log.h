@@ -29,17 +29,14 @@ public:
   {
     return counts_;
   }
-  uint64_t total() const
-  {
-    return total_;
-  }
+  /// Refusals so far, all reasons (the sum of counts(); a handful of reasons, read once per diagnostics update).
+  uint64_t total() const;
 
 private:
   double period_;
   Throttle throttle_;
   std::map<std::string, uint64_t> counts_;
   std::map<std::string, uint64_t> held_back_;
-  uint64_t total_ = 0;
 };
 
 }  // namespace openable

@@ -4,7 +4,6 @@
 #include <cstdint>
 #include <cstring>
 
-#include "openable/descriptors/descriptor_registry.h"
 #include "openable/error.h"
 
 namespace openable
@@ -42,6 +41,7 @@ FrameDescriber::FrameDescriber(const Config& config) : FrameDescriber(ValidConfi
 FrameDescriber::FrameDescriber(const ValidConfig& config)
   : config_(*config),
     preprocessor_(*config),
+    row_(&descriptorInfo(config->descriptor)),
     layout_(descriptorLayout(*config)),
     extractor_(createDescriptorExtractor(*config))
 {

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cmath>
 
-#include "openable/descriptors/descriptor_registry.h"
 #include "openable/error.h"
 #include "openable/description/input_contract.h"
 #include "openable/description/stereo.h"
@@ -115,7 +114,8 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, SessionMap map, MapMod
 std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
 {
   const Preprocessor& pre = describer_.preprocessor();
-  if (config_.camera() == CameraType::Panoramic && !input.cameras.empty())
+  // Camera and descriptor were parsed once, when the describer was built: nothing is looked up per frame.
+  if (pre.options().camera == CameraType::Panoramic && !input.cameras.empty())
   {
     for (size_t i = 0; i < input.cameras.size(); ++i)
     {
@@ -130,7 +130,7 @@ std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
   const InputProblem size = checkImageSize(input.image.cols, input.image.rows);
   if (!size.ok())
     throw FrameRefused(size.reason, size.what);
-  if (!descriptorInfo(config_.descriptor).needs_disparity)
+  if (!describer_.descriptor().needs_disparity)
     return pre.patches(input.image);  // stereo with a mono descriptor: the left image only, no SGBM cost
   if (!input.disparity.empty())
     return pre.patchesWithDisparity(input.image, disparityFromImage(input.disparity));

@@ -5,7 +5,6 @@ namespace openable
 bool RefusalLog::note(const std::string& reason, double now, uint64_t& held_back)
 {
   ++counts_[reason];
-  ++total_;
   uint64_t& waiting = held_back_[reason];
   if (!throttle_.ready(reason, now, period_))
   {
@@ -16,6 +15,14 @@ bool RefusalLog::note(const std::string& reason, double now, uint64_t& held_back
   held_back = waiting;
   waiting = 0;
   return true;
+}
+
+uint64_t RefusalLog::total() const
+{
+  uint64_t sum = 0;
+  for (const auto& [reason, count] : counts_)
+    sum += count;
+  return sum;
 }
 
 }  // namespace openable
