@@ -34,7 +34,7 @@ bench: build
 	@bash scripts/bench.sh $(WS)
 
 # Fuzzes the loaders of untrusted files (map, configuration YAML, .npy) with libFuzzer, ASan and UBSan,
-# FUZZ_SECONDS each. Needs clang, installed here rather than by deps: make test does not need it.
+# FUZZ_SECONDS each. Needs clang (an optional package of deps; make test runs the same script for 10 s a target).
 FUZZ_SECONDS ?= 60
 .PHONY: fuzz
 fuzz: deps

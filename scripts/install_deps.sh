@@ -21,9 +21,10 @@ packages=(
 )
 
 # Optional: the aarch64 cross check of the Hamming kernels (scripts/cross_check_aarch64.sh, one more test of
-# run_tests.sh when the compiler is there). About 25 s and 110 MB to install on x86-64; when they cannot be
-# installed the check is skipped, nothing fails.
-optional=()
+# run_tests.sh when the compiler is there; about 25 s and 110 MB to install on x86-64) and clang for the short
+# fuzz run of run_tests.sh (libFuzzer, test/fuzz/run_fuzz.sh). When they cannot be installed those checks are
+# skipped, nothing fails.
+optional=(clang)
 [ "$(uname -m)" = x86_64 ] && optional+=(g++-aarch64-linux-gnu qemu-user)
 
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
@@ -50,6 +51,6 @@ fi
 if [ ${#missing_optional[@]} -gt 0 ]; then
   echo "install_deps: installing ${#missing_optional[@]} optional packages: ${missing_optional[*]}"
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing_optional[@]}" \
-    >/dev/null || echo "install_deps: could not install ${missing_optional[*]}: the aarch64 cross check is skipped"
+    >/dev/null || echo "install_deps: could not install ${missing_optional[*]}: the aarch64 cross check or the fuzz run is skipped"
 fi
 echo "install_deps: done"

@@ -85,6 +85,22 @@ if command -v aarch64-linux-gnu-g++ > /dev/null || [ "$(uname -m)" = aarch64 ]; 
   fi
 fi
 
+# One more test where clang is installed (install_deps.sh): every libFuzzer target (test/fuzz: the map, the
+# configuration YAML, .npy, the place messages, the detector's images) built with ASan + UBSan and run for
+# FUZZ_SECONDS (default 10) from the committed corpus; a finding fails it (test/fuzz/run_fuzz.sh, output in build/).
+if command -v clang++ > /dev/null; then
+  fuzz_log=$root/build/fuzz.log
+  FUZZ_SECONDS=${FUZZ_SECONDS:-10} JOBS=$(nproc) bash "$root/test/fuzz/run_fuzz.sh" > "$fuzz_log" 2>&1
+  fuzz_rc=$?
+  count_check $fuzz_rc
+  if [ $fuzz_rc -eq 0 ]; then
+    echo "fuzz: $(grep -c '^fuzz: .* for ' "$fuzz_log") targets, ${FUZZ_SECONDS:-10} s each, no finding" \
+      "($(grep -h 'stat::number_of_executed_units' "$fuzz_log" | awk '{s += $2} END {print s + 0}') inputs)"
+  else
+    tail -n 30 "$fuzz_log"
+  fi
+fi
+
 # One more test: no header outside the C/C++ library, OpenCV, yaml-cpp, Eigen, Ceres and the core's own
 # reached the core's objects (ROS's headers share /usr/include on Debian, so no include path can keep them out).
 python3 "$root/scripts/check_core_ros_free.py" "$PWD"
