@@ -34,7 +34,8 @@ inline Files visible(const std::filesystem::path& dir, const std::vector<std::st
   return files;
 }
 
-/// Names in `dir` and beside it that only an unfinished run leaves.
+/// Names in `dir` and beside it that only an unfinished run leaves: staging folders, temporaries, generation
+/// folders of a shared folder that its set's current link does not name, links that point at nothing.
 inline std::vector<std::string> leftovers(const std::filesystem::path& dir)
 {
   std::vector<std::string> found;
@@ -43,8 +44,20 @@ inline std::vector<std::string> leftovers(const std::filesystem::path& dir)
     for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
     {
       const std::string name = it->path().filename().string();
-      if (name.find(".openable_staging.") != std::string::npos || name.find(".openable_commit.") != std::string::npos ||
-          name.find(".openable_output.") != std::string::npos || name.find(".tmp.") != std::string::npos)
+      std::error_code status;
+      bool stale = name.find(".openable_staging.") != std::string::npos ||
+                   name.find(".openable_output.") != std::string::npos || name.find(".tmp.") != std::string::npos ||
+                   (std::filesystem::is_symlink(it->path(), status) && !std::filesystem::exists(it->path(), status));
+      const std::string data = ".openable_data.";
+      if (folder == dir && name.rfind(data, 0) == 0)
+      {
+        // .openable_data.<set>.<n>.<pid>: stale unless .openable_current.<set> names it.
+        const std::string rest = name.substr(data.size());
+        const size_t pid_dot = rest.rfind('.');
+        const std::string set = rest.substr(0, rest.rfind('.', pid_dot - 1));
+        stale = stale || std::filesystem::read_symlink(dir / (".openable_current." + set), status).string() != name;
+      }
+      if (stale)
         found.push_back(it->path().string());
     }
   return found;

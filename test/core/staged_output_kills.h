@@ -1,6 +1,6 @@
 #pragma once
 // Writing an output set and killing the writer at one of its steps: shared by the output-set tests of the core
-// (test_staged_output, test_staged_output_journal).
+// (test_staged_output, test_staged_output_shared).
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>

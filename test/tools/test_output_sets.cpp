@@ -1,9 +1,8 @@
 // Issue 22, finding 5, on the real tools: openable_eval, openable_trajectory, openable_map export and
 // openable_offline (into a folder shared with the user's files, with --map-out) are killed with SIGKILL after
-// random delays while they write a new output set over an earlier one. After each kill the folder holds the
-// earlier set or the new one (openable_offline's shared folder: once the next run's start-up has completed a
-// committed journal, as StagedOutput::recover does), and after the next run no staging folder, journal or
-// temporary file is left. On a full disk (the file size limit) openable_eval exits 1 and leaves the earlier set.
+// random delays while they write a new output set over an earlier one. Right after each kill the folder holds
+// the earlier set or the new one (openable_offline's shared folder too: its files are links through one current
+// link), and after the next run no staging folder, stale generation or temporary file is left. On a full disk (the file size limit) openable_eval exits 1 and leaves the earlier set.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -86,7 +85,7 @@ protected:
   /// Runs `old_args` then `new_args` into `out` (prepared by `prepare`) `kills` times, killing the second run
   /// after a random delay; `same` tells whether what is seen is the earlier set or the new one.
   void killRuns(const std::string& binary, const std::string& old_args, const std::string& new_args,
-                const fs::path& out, int kills, const std::function<void()>& prepare, bool settle,
+                const fs::path& out, int kills, const std::function<void()>& prepare,
                 const std::function<int(const Files&)>& which, const std::function<void()>& after_old = [] {})
   {
     // How long a whole run takes: the kills fall from the start to just past its end.
@@ -107,8 +106,6 @@ protected:
       std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay(random)));
       ::kill(child, SIGKILL);
       killed += finish(child) == -SIGKILL;
-      if (settle)
-        openable::StagedOutput::recover(out.string());  // what the next run does first
       const int seen = which(visible(out));
       EXPECT_NE(seen, 0) << "kill " << k << ": neither the earlier set nor the new one";
       earlier += seen == 1;
@@ -144,7 +141,7 @@ TEST_F(OutputSetsTest, EvalKilledOrOutOfDiskLeavesTheEarlierOrTheNewSet)
   ASSERT_EQ(old_set.size(), 3u);  // metrics.json, pr_curve.csv, pr_curve.png
   ASSERT_NE(old_set, new_set);
   killRuns(OPENABLE_EVAL_BINARY, common + out.string() + "' --tolerance 0", common + out.string() + "' --tolerance 3",
-           out, 20, [&] { fs::remove_all(out); }, false, exactly(old_set, new_set));
+           out, 20, [&] { fs::remove_all(out); }, exactly(old_set, new_set));
 
   // The issue's reproducer: a full disk (here the file size limit, below the PNG's size) fails the run and
   // keeps the earlier metrics.json and pr_curve.csv beside the earlier pr_curve.png.
@@ -168,7 +165,7 @@ TEST_F(OutputSetsTest, TrajectoryKilledLeavesTheEarlierOrTheNewSet)
   ASSERT_EQ(old_set.size(), 2u);
   ASSERT_NE(old_set, new_set);
   killRuns(OPENABLE_TRAJECTORY_BINARY, common + out.string() + " --distance 5",
-           common + out.string() + " --distance 400", out, 20, [&] { fs::remove_all(out); }, false,
+           common + out.string() + " --distance 400", out, 20, [&] { fs::remove_all(out); },
            exactly(old_set, new_set));
 }
 
@@ -217,7 +214,7 @@ TEST_F(OutputSetsTest, OfflineKilledLeavesTheEarlierOrTheNewSetAndTheUsersFiles)
       return 1;
     return seen == new_set && timings != old_timings ? 2 : 0;
   };
-  killRuns(OPENABLE_OFFLINE_BINARY, old_args, new_args, out, 20, prepare, true, which,
+  killRuns(OPENABLE_OFFLINE_BINARY, old_args, new_args, out, 20, prepare, which,
            [&] { old_timings = readText(out / "timings.json"); });
   EXPECT_EQ(readText(out / "notes.txt"), "the user's notes\n");
 }
@@ -237,7 +234,7 @@ TEST_F(OutputSetsTest, MapExportKilledLeavesTheEarlierOrTheNewSet)
   ASSERT_NE(old_set, new_set);
   killRuns(OPENABLE_MAP_BINARY, "export " + (root_ / "a.map").string() + " --csv " + out.string(),
            "export " + (root_ / "b.map").string() + " --csv " + out.string(), out, 20, [&] { fs::remove_all(out); },
-           false, exactly(old_set, new_set));
+           exactly(old_set, new_set));
 }
 
 }  // namespace

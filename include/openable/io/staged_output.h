@@ -16,16 +16,20 @@ namespace openable
 ///   rename (Linux renameat2 RENAME_EXCHANGE): a kill -9 at any point leaves `dir` with the earlier set or
 ///   the new one, and the earlier set (now in the staging name) is removed;
 /// - when `dir` also holds files this set does not own (the user's, another tool's), or is a symbolic link
-///   or the working folder, only this set's files
-///   are replaced, through a journal: the staging folder `<dir>/.openable_staging.<set>.<pid>` is renamed to
-///   `<dir>/.openable_commit.<set>.<pid>` (the commit point, after which the new set is the one that
-///   counts), then its files are moved into `dir`, the earlier set's files that the new one lacks removed,
-///   and the manifest moved last. A kill after the commit is completed (rolled forward) by the next run on
-///   `dir`; a kill before it leaves the earlier set and a staging folder that the next run removes.
+///   or the working folder, the set lives in a generation folder `<dir>/.openable_data.<set>.<n>.<pid>`, and
+///   each of its files in `dir` is a symbolic link `<name> -> .openable_current.<set>/<name>` through the
+///   set's current link `<dir>/.openable_current.<set>`, which names the generation (as Kubernetes' atomic
+///   writer does). publish() moves the staging folder `<dir>/.openable_staging.<set>.<pid>` to a new
+///   generation, makes the links the new set adds (they point at nothing until the switch: the name stays
+///   absent), then switches the current link in one atomic rename: a reader sees the earlier set or the new
+///   one at every instant. The earlier set's links the new one lacks and the earlier generation are removed
+///   after. An earlier set of plain files (from an owned folder) is first hard-linked into a generation of
+///   its own and each file replaced by its link, the same bytes before and after.
 /// Files of `dir` that the set does not own are never touched.
 ///
 /// The constructor first cleans up after dead runs (processes no longer running) on `dir`: it removes their
-/// staging folders and `*.tmp.<pid>` files and completes their committed journals.
+/// staging folders, `*.tmp.<pid>` files, generation folders that are not current and links that point at
+/// nothing the current set has.
 class StagedOutput
 {
 public:
@@ -50,7 +54,8 @@ public:
 private:
   bool ownsFolder() const;
   void publishByExchange();
-  void publishByJournal();
+  void publishShared();
+  void linkEarlierSet(const std::vector<std::string>& earlier);
 
   std::filesystem::path dir_, staging_;
   std::string set_;

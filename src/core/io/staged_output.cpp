@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -21,9 +22,9 @@ namespace openable
 namespace
 {
 const char kStaging[] = ".openable_staging.";
-const char kCommit[] = ".openable_commit.";
+const char kData[] = ".openable_data.";        // <dir>/.openable_data.<set>.<n>.<pid>: one set, whole
+const char kCurrent[] = ".openable_current.";  // <dir>/.openable_current.<set>: the link to the set that counts
 const char kManifest[] = ".openable_set.";
-const char kJournal[] = ".openable_journal";
 
 /// The pid at the end of `name` ("<prefix>...<.pid>") when `name` starts with `prefix`, else -1.
 long trailingPid(const std::string& name, const std::string& prefix)
@@ -32,6 +33,11 @@ long trailingPid(const std::string& name, const std::string& prefix)
     return -1;
   const size_t dot = name.rfind('.');
   return dot == std::string::npos || dot + 1 < prefix.size() ? -1 : pidSuffix(name, name.substr(0, dot + 1));
+}
+
+bool startsWith(const std::string& name, const std::string& prefix)
+{
+  return name.compare(0, prefix.size(), prefix) == 0;
 }
 
 bool plainName(const std::string& name)
@@ -70,35 +76,105 @@ void renameOrThrow(const fs::path& from, const fs::path& to)
     throw Error("cannot move '" + from.string() + "' to '" + to.string() + "': " + std::strerror(errno));
 }
 
-/// Completes a committed journal folder `commit` of `dir`: moves its files in (the manifest last), removes the
-/// earlier set's files the new set lacks, removes `commit`. Safe to repeat after a kill at any point.
-void rollForward(const fs::path& commit, const fs::path& dir)
+/// A generation folder's name for `set`, unique even when a pid comes again: <kData><set>.<ns>.<pid>.
+std::string generationName(const std::string& set)
 {
-  std::string manifest;
+  static long long last = 0;
+  last = std::max(last + 1, static_cast<long long>(std::chrono::system_clock::now().time_since_epoch().count()));
+  return kData + set + "." + std::to_string(last) + "." + std::to_string(::getpid());
+}
+
+/// Whether a leftover of process `pid` is stale: the process is gone, or it is this one (which has moved on).
+bool staleOwner(long pid)
+{
+  return pid > 0 && (pid == ::getpid() || !processAlive(pid));
+}
+
+/// Where a file `name` of `set` in a shared folder points: through the set's current link, so that one rename
+/// of that link switches every file of the set at once.
+fs::path linkTarget(const std::string& set, const std::string& name)
+{
+  return fs::path(kCurrent + set) / name;
+}
+
+/// `link` made to point at `target`, atomically: a new link beside it renamed over it (a file or link).
+void pointLink(const fs::path& link, const fs::path& target)
+{
+  const fs::path temp = link.string() + ".tmp." + std::to_string(::getpid());
   std::error_code ec;
-  for (const std::string& name : entries(commit))
-  {
-    if (name == kJournal)
-      continue;
-    if (name.compare(0, sizeof(kManifest) - 1, kManifest) == 0)
-      manifest = name;
-    else
+  fs::remove(temp, ec);
+  fs::create_symlink(target, temp, ec);
+  if (ec)
+    throw Error("cannot make the link '" + link.string() + "': " + ec.message());
+  renameOrThrow(temp, link);
+}
+
+/// Whether `path` is a link of `set` (made by linkTarget) in a shared folder.
+bool isSetLink(const fs::path& path, const std::string& set)
+{
+  std::error_code ec;
+  return fs::is_symlink(path, ec) && startsWith(fs::read_symlink(path, ec).string(), kCurrent + set + "/");
+}
+
+/// The generation folder the current link of `set` in `dir` names ("" when there is none).
+std::string currentData(const fs::path& dir, const std::string& set)
+{
+  std::error_code ec;
+  const fs::path target = fs::read_symlink(dir / (kCurrent + set), ec);
+  return ec ? std::string() : target.filename().string();
+}
+
+/// The sets of a shared folder: the names after kCurrent of its current links and after kData of its
+/// generation folders (which end in ".<n>.<pid>").
+std::set<std::string> sharedSets(const std::vector<std::string>& names)
+{
+  std::set<std::string> sets;
+  for (const std::string& name : names)
+    if (startsWith(name, kCurrent) && name.find(".tmp.") == std::string::npos)
+      sets.insert(name.substr(sizeof(kCurrent) - 1));
+    else if (startsWith(name, kData))
     {
-      renameOrThrow(commit / name, dir / name);
-      outputStep("set file moved");
+      const std::string rest = name.substr(sizeof(kData) - 1);
+      const size_t pid_dot = rest.rfind('.');
+      const size_t n_dot = pid_dot == std::string::npos || pid_dot == 0 ? std::string::npos : rest.rfind('.', pid_dot - 1);
+      if (n_dot != std::string::npos && n_dot > 0)
+        sets.insert(rest.substr(0, n_dot));
     }
-  }
-  for (const std::string& name : readLines(commit / kJournal))
+  return sets;
+}
+
+/// Settles set `set` of shared folder `dir` after dead runs: removes its generation folders that are not
+/// current (their writer died before or after the switch), its links that the current set lacks (made for a
+/// switch that never came, or left by one that did) and its links' temporaries.
+void settleShared(const fs::path& dir, const std::string& set)
+{
+  const std::string current = currentData(dir, set);
+  const std::vector<std::string> owned = readLines(dir / (kCurrent + set) / (kManifest + set));
+  const std::vector<std::string> names = entries(dir);
+  const std::string data = kData + set + ".";
+  // A live writer has made its links before its switch: they point at nothing yet and must stay.
+  bool writer_alive = false;
+  for (const std::string& name : names)
+    writer_alive = writer_alive || (startsWith(name, data) && name != current && !staleOwner(trailingPid(name, kData)));
+  std::error_code ec;
+  for (const std::string& name : names)
   {
-    std::error_code ignored;
-    fs::remove(dir / name, ignored);
-    outputStep("earlier file removed");
+    const fs::path path = dir / name;
+    const size_t temp = name.rfind(".tmp.");
+    if (startsWith(name, data) && name != current && staleOwner(trailingPid(name, kData)))
+      fs::remove_all(path, ec);
+    else if (temp != std::string::npos && fs::is_symlink(path, ec) &&
+             staleOwner(pidSuffix(name, name.substr(0, temp + 5))) &&
+             (isSetLink(path, set) || startsWith(fs::read_symlink(path, ec).string(), data)))
+      fs::remove(path, ec);  // a link's temporary (pointLink)
+    else if (!writer_alive && isSetLink(path, set) && !fs::exists(path, ec) && name != kManifest + set &&
+             std::find(owned.begin(), owned.end(), name) == owned.end())
+      fs::remove(path, ec);
+    else
+      continue;
+    outputStep("stale entry removed");
+    ec.clear();
   }
-  if (!manifest.empty())
-    renameOrThrow(commit / manifest, dir / manifest);
-  syncPath(dir.string());
-  outputStep("set moved");
-  fs::remove_all(commit, ec);
 }
 }  // namespace
 
@@ -137,11 +213,6 @@ void StagedOutput::recover(const std::string& dir_name)
       if (!processAlive(pid))
         fs::remove_all(path, ec);  // never committed: the earlier set stands
     }
-    else if ((pid = trailingPid(name, kCommit)) > 0)
-    {
-      if (!processAlive(pid))
-        rollForward(path, dir);  // committed: the new set stands
-    }
     else if (name.find(".tmp.") != std::string::npos && owned.count(name.substr(0, name.rfind(".tmp."))))
     {
       pid = pidSuffix(name, name.substr(0, name.rfind(".tmp.") + 5));
@@ -150,6 +221,8 @@ void StagedOutput::recover(const std::string& dir_name)
     }
     ec.clear();
   }
+  for (const std::string& set : sharedSets(names))
+    settleShared(dir, set);
 }
 
 bool StagedOutput::ownsFolder() const
@@ -230,7 +303,7 @@ void StagedOutput::publish()
   if (exchange_)
     publishByExchange();
   else
-    publishByJournal();
+    publishShared();
 }
 
 void StagedOutput::publishByExchange()
@@ -253,12 +326,12 @@ void StagedOutput::publishByExchange()
   {
     if (owned && errno != EINVAL && errno != ENOSYS && errno != ENOTSUP)
       throw Error("cannot publish the output set in '" + dir_.string() + "': " + std::strerror(errno));
-    // A shared folder now, or a file system without the exchange: the journal in the folder.
+    // A shared folder now, or a file system without the exchange: the set's links in the folder.
     const fs::path inside = dir_ / (kStaging + set_ + "." + std::to_string(::getpid()));
     renameOrThrow(staging_, inside);
     staging_ = inside;
     exchange_ = false;
-    publishByJournal();
+    publishShared();
     return;
   }
   published_ = true;
@@ -276,22 +349,89 @@ void StagedOutput::publishByExchange()
   outputStep("earlier set removed");
 }
 
-void StagedOutput::publishByJournal()
+void StagedOutput::publishShared()
 {
-  std::string journal;
-  for (const std::string& name : readLines(dir_ / manifestName(set_)))
-    if (std::find(names_.begin(), names_.end(), name) == names_.end())
-      journal += name + "\n";
-  writeFileAtomically((staging_ / kJournal).string(), journal);
   syncPath(staging_.string());
   outputStep("staging synced");
-  const fs::path commit = dir_ / (kCommit + set_ + "." + std::to_string(::getpid()));
-  renameOrThrow(staging_, commit);
-  published_ = true;
+  // Every file of the set is a link through the set's current link (<name> -> .openable_current.<set>/<name>,
+  // which points at a generation folder), so one rename of the current link switches the whole set.
+  const std::string manifest = manifestName(set_);
+  const std::vector<std::string> earlier = readLines(dir_ / manifest);
+  linkEarlierSet(earlier);
+  const std::string data = generationName(set_);
+  renameOrThrow(staging_, dir_ / data);
   staging_.clear();
+  outputStep("generation ready");
+  // Links the earlier set lacks point at nothing until the switch: the name is absent, as it was.
+  std::vector<std::string> replaced;  // files of that name that are not the set's links: replaced after
+  std::error_code ec;
+  for (const std::string& name : names_)
+  {
+    const fs::path path = dir_ / name;
+    if (isSetLink(path, set_))
+      continue;
+    if (fs::exists(fs::symlink_status(path, ec)))
+      replaced.push_back(name);
+    else
+    {
+      fs::create_symlink(linkTarget(set_, name), path, ec);
+      if (ec)
+        throw Error("cannot make the link '" + path.string() + "': " + ec.message());
+    }
+  }
+  if (!isSetLink(dir_ / manifest, set_))
+    pointLink(dir_ / manifest, linkTarget(set_, manifest));
   syncPath(dir_.string());
-  outputStep("journal committed");
-  rollForward(commit, dir_);
+  outputStep("links made");
+  pointLink(dir_ / (kCurrent + set_), data);  // the switch: the new set is the one that counts
+  published_ = true;
+  syncPath(dir_.string());
+  outputStep("set switched");
+  for (const std::string& name : replaced)
+    pointLink(dir_ / name, linkTarget(set_, name));
+  for (const std::string& name : earlier)
+    if (std::find(names_.begin(), names_.end(), name) == names_.end() && isSetLink(dir_ / name, set_))
+      fs::remove(dir_ / name, ec);
+  outputStep("earlier links removed");
+  settleShared(dir_, set_);  // the earlier generation
+  outputStep("earlier set removed");
+}
+
+void StagedOutput::linkEarlierSet(const std::vector<std::string>& earlier)
+{
+  // The earlier set as plain files (written into a folder it owned, or by an earlier version): hard links of
+  // them in a generation folder of their own, then each file replaced by its link, the same bytes before and
+  // after whenever a kill comes (the next run goes on from where it stopped).
+  const std::string manifest = manifestName(set_);
+  std::error_code ec;
+  std::vector<std::string> files;
+  for (const std::string& name : earlier)
+    if (fs::is_regular_file(fs::symlink_status(dir_ / name, ec)))
+      files.push_back(name);
+  if (fs::is_regular_file(fs::symlink_status(dir_ / manifest, ec)))
+    files.push_back(manifest);
+  if (files.empty())
+    return;
+  if (currentData(dir_, set_).empty())
+  {
+    const fs::path data = dir_ / generationName(set_);
+    fs::create_directory(data, ec);
+    for (const std::string& name : files)
+    {
+      fs::create_hard_link(dir_ / name, data / name, ec);
+      if (ec)
+        fs::copy_file(dir_ / name, data / name, ec);
+      if (ec)
+        throw Error("cannot keep the earlier '" + (dir_ / name).string() + "': " + ec.message());
+    }
+    syncPath(data.string());
+    pointLink(dir_ / (kCurrent + set_), data.filename());
+    outputStep("earlier set linked");
+  }
+  for (const std::string& name : files)
+    if (fs::exists(dir_ / (kCurrent + set_) / name, ec))
+      pointLink(dir_ / name, linkTarget(set_, name));
+  syncPath(dir_.string());
 }
 
 }  // namespace openable
