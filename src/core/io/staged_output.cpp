@@ -211,7 +211,7 @@ void StagedOutput::recover(const std::string& dir_name)
     if ((pid = trailingPid(name, kStaging)) > 0 || (pid = pidSuffix(name, ".openable_output.")) > 0)
     {
       if (!processAlive(pid))
-        fs::remove_all(path, ec);  // never committed: the earlier set stands
+        fs::remove_all(path, ec);  // never published: the earlier set stands
     }
     else if (name.find(".tmp.") != std::string::npos && owned.count(name.substr(0, name.rfind(".tmp."))))
     {
@@ -229,7 +229,7 @@ bool StagedOutput::ownsFolder() const
 {
   std::error_code ec;
   if (fs::is_symlink(dir_, ec) || fs::equivalent(dir_, fs::current_path(ec), ec))
-    return false;  // a link stays a link, the working folder stays in place: their files are replaced one by one
+    return false;  // a link stays a link, the working folder stays in place: the set goes in as its links
   const std::vector<std::string> earlier = readLines(dir_ / manifestName(set_));
   for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec))
   {
