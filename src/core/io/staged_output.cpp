@@ -26,18 +26,18 @@ const char kData[] = ".openable_data.";        // <dir>/.openable_data.<set>.<n>
 const char kCurrent[] = ".openable_current.";  // <dir>/.openable_current.<set>: the link to the set that counts
 const char kManifest[] = ".openable_set.";
 
-/// The pid at the end of `name` ("<prefix>...<.pid>") when `name` starts with `prefix`, else -1.
-long trailingPid(const std::string& name, const std::string& prefix)
-{
-  if (name.compare(0, prefix.size(), prefix) != 0)
-    return -1;
-  const size_t dot = name.rfind('.');
-  return dot == std::string::npos || dot + 1 < prefix.size() ? -1 : pidSuffix(name, name.substr(0, dot + 1));
-}
-
 bool startsWith(const std::string& name, const std::string& prefix)
 {
   return name.compare(0, prefix.size(), prefix) == 0;
+}
+
+/// The pid at the end of `name` ("<prefix>...<.pid>") when `name` starts with `prefix`, else -1.
+long trailingPid(const std::string& name, const std::string& prefix)
+{
+  if (!startsWith(name, prefix))
+    return -1;
+  const size_t dot = name.rfind('.');
+  return dot == std::string::npos || dot + 1 < prefix.size() ? -1 : pidSuffix(name, name.substr(0, dot + 1));
 }
 
 bool plainName(const std::string& name)
@@ -201,7 +201,7 @@ void StagedOutput::recover(const std::string& dir_name)
   std::set<std::string> owned;
   const std::vector<std::string> names = entries(dir);
   for (const std::string& name : names)
-    if (name.compare(0, sizeof(kManifest) - 1, kManifest) == 0)
+    if (startsWith(name, kManifest))
       for (const std::string& file : readLines(dir / name))
         owned.insert(file);
   for (const std::string& name : names)
@@ -282,7 +282,7 @@ StagedOutput::~StagedOutput()
 
 std::string StagedOutput::path(const std::string& name)
 {
-  if (!plainName(name) || name.compare(0, 9, ".openable") == 0)
+  if (!plainName(name) || startsWith(name, ".openable"))
     throw Error("output file name '" + name + "' is not a plain file name");
   if (std::find(names_.begin(), names_.end(), name) == names_.end())
     names_.push_back(name);
