@@ -96,6 +96,8 @@ struct Config
   int consistency_tolerance = 2;   ///< frames a match may deviate from advancing one place per frame
   double continue_uniqueness = 0.03;  ///< a published run goes on through frames this unique (below
                                       ///< min_uniqueness) whose matches keep to its line (>= min_uniqueness: off)
+  int confirm_frames = 3;  ///< a loop closure is published once this many more stored frames go on with its run
+                           ///< (0 = at once; LoopConfirmation)
   double exclusion_seconds = 0.0;  ///< loop-closure mode: frames stamped less than this before the query are
                                    ///< never matched (0 = off; the frame window still applies)
 

@@ -84,6 +84,8 @@ public:
 private:
   Detector(ros::NodeHandle nh, ros::NodeHandle pnh, std::string name, RosParameters parameters);
   void publish(const std_msgs::Header& header, const openable::FrameOutcome& outcome);
+  /// One loop closure out: the topic, the counters, the matrix and the markers (`current`: the frame being handled).
+  void publishLoop(const LoopClosurePtr& msg, const openable::FrameOutcome& loop, const openable::FrameOutcome& current);
   /// The bookkeeping of a stored frame: counters, descriptors out, markers, the distance matrix's row.
   void recordStored(const std_msgs::Header& header, const openable::FrameOutcome& outcome);
   bool acceptStamp(const std_msgs::Header& header, const std::string& topic, openable::FrameOutcome& outcome,

@@ -25,7 +25,7 @@ public:
     return rate_ > 0.0;
   }
   void addRow(uint64_t first_id, const std::vector<float>& row);
-  void addLoop(uint64_t match_id);
+  void addLoop(uint64_t match_id, uint64_t rows_ago = 0);
   /// Renders and publishes with the input frame's header when due and watched. Returns an error text
   /// (empty when fine) for the caller to log.
   std::string publish(const std_msgs::Header& header, const openable::Config& config);

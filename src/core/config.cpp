@@ -248,6 +248,7 @@ Config Config::paper()
   c.standstill_distance = 0.0;
   c.consistent_frames = 4;
   c.continue_uniqueness = 1.0;
+  c.confirm_frames = 0;
   return c;
 }
 

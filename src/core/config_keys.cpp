@@ -167,6 +167,10 @@ const std::vector<KeyAccess>& table()
               "loop-closure decision: a published run goes on through frames whose uniqueness is at least this "
               "(below min_uniqueness) while their matches keep to its line (>= min_uniqueness = off)",
               &Config::continue_uniqueness).range(0, 1).live(),
+      makeKey("confirm_frames",
+              "loop-closure decision: a loop closure is published once this many more stored frames go on with its "
+              "run; it arrives that many keyframes late, with its own stamp (0 = at once)",
+              &Config::confirm_frames).range(0, 1000).live(),
       makeKey("exclusion_seconds",
               "loop-closure mode: frames stamped less than this before the query are never matched (s; 0 = off)",
               &Config::exclusion_seconds).range(0, 1e9).live(),

@@ -108,7 +108,9 @@ std::unique_ptr<Detector> Detector::create(ros::NodeHandle nh, ros::NodeHandle p
     else
       ROS_WARN_STREAM_NAMED(name, "~map_file: " << message << "; starting a new history instead");
   }
-  d->loop_pub_ = nh.advertise<LoopClosure>("loop_closures", 100);
+  // A stop's repeated loop closures go out together once its frame is confirmed (confirm_frames): the queue
+  // holds the most a confirmation releases, so none is dropped.
+  d->loop_pub_ = nh.advertise<LoopClosure>("loop_closures", openable::LoopConfirmation::kMaxRepeats + 100);
   d->decisions_pub_ = nh.advertise<LoopClosure>("decisions", 100);
   d->services_ = std::make_unique<MapServices>(pnh, *d);
   if (parameters.publish_descriptors)
@@ -288,22 +290,35 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
   if (decisions_pub_.getNumSubscribers() > 0)
     decisions_pub_.publish(LoopClosureConstPtr(msg));
   if (outcome.published())
+    publishLoop(msg, outcome, outcome);
+  // Loop closures of earlier frames that this one confirmed (confirm_frames): each with its own frame's stamp.
+  for (const openable::FrameOutcome& earlier : outcome.confirmed)
   {
-    ++counters_.loops;
-    loop_pub_.publish(LoopClosureConstPtr(msg));
+    std_msgs::Header earlier_header = header;
+    if (earlier.query.stamp > 0.0)
+      earlier_header.stamp = ros::Time(earlier.query.stamp);
+    ++counters_.statuses[openable::toString(earlier.status)];
+    publishLoop(makeLoopClosure(earlier_header, earlier), earlier, outcome);
   }
   if (!outcome.stored)
     return;
-  if (outcome.published())
-  {
-    matrix_->addLoop(outcome.detection.best.id);
-    if (msg->has_poses)
-      markers_->addLoop(msg->query_pose.position, msg->match_pose.position);
-  }
   const std::string error = matrix_->publish(header, detector_->config());
   if (!error.empty())
     warnThrottled("render", kWarnPeriod, error);
-  markers_->publish(header.stamp, outcome.published());
+  markers_->publish(header.stamp, outcome.published() || !outcome.confirmed.empty());
+}
+
+void Detector::publishLoop(const LoopClosurePtr& msg, const openable::FrameOutcome& loop,
+                           const openable::FrameOutcome& current)
+{
+  ++counters_.loops;
+  loop_pub_.publish(LoopClosureConstPtr(msg));
+  if (!current.stored || !loop.stored)
+    return;  // a standstill's repeat: the loop is drawn once, with its stored frame
+  // The matrix's last row is the current frame's; a confirmed loop's row is a few stored frames before it.
+  matrix_->addLoop(loop.detection.best.id, current.query.id >= loop.query.id ? current.query.id - loop.query.id : 0);
+  if (msg->has_poses)
+    markers_->addLoop(msg->query_pose.position, msg->match_pose.position);
 }
 
 void Detector::recordStored(const std_msgs::Header& header, const openable::FrameOutcome& outcome)

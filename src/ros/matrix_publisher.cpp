@@ -34,10 +34,10 @@ void MatrixPublisher::addRow(uint64_t first_id, const std::vector<float>& row)
     view_.addRow(first_id, row);
 }
 
-void MatrixPublisher::addLoop(uint64_t match_id)
+void MatrixPublisher::addLoop(uint64_t match_id, uint64_t rows_ago)
 {
   if (wanted())
-    view_.addLoop(match_id);
+    view_.addLoop(match_id, rows_ago);
 }
 
 std::string MatrixPublisher::publish(const std_msgs::Header& header, const openable::Config& config)

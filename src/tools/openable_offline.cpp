@@ -219,6 +219,8 @@ int run(const Options& options)
   std::vector<std::vector<float>> rows;  // per stream file: distances by frame number (empty = not described)
   const bool panoramic = config.camera() == openable::CameraType::Panoramic;
   openable::LoopCsvWriter csv(panoramic);
+  constexpr size_t kNoRow = static_cast<size_t>(-1);
+  std::vector<size_t> row_of_frame;  // by FrameOutcome::frame
   std::map<std::string, size_t> status_counts;
   size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;
   std::vector<float> row;
@@ -252,21 +254,31 @@ int run(const Options& options)
     detector->loopDetector().lastRow(row);
     numbers->toNumbers(map, own, row, static_cast<size_t>(localisation ? reference_files : query + 1), rows.back());
 
-    ++status_counts[openable::toString(outcome.status)];
     const openable::Detection& d = outcome.detection;
     const long match = d.has_candidates ? numbers->stored(map, d.best.session, d.best.position, own) : -1;
-    csv.add(csvFrame(query, match, outcome, localisation ? static_cast<uint32_t>(map.sessionCount()) : own));
+    // Each frame's row, found again by its number when a later frame confirms its loop closure.
+    row_of_frame.resize(outcome.frame + 1, kNoRow);
+    row_of_frame[outcome.frame] =
+        csv.add(csvFrame(query, match, outcome, localisation ? static_cast<uint32_t>(map.sessionCount()) : own));
+    for (const openable::FrameOutcome& earlier : outcome.confirmed)
+      if (earlier.frame < row_of_frame.size() && row_of_frame[earlier.frame] != kNoRow)
+        csv.setStatus(row_of_frame[earlier.frame], openable::FrameStatus::Published);
     if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;
       truth_hits += std::labs(match - query) <= options.ground_truth_tolerance ? 1 : 0;
     }
-    if (!outcome.published())
-      continue;
-    ++published;
-    published_correct += std::labs(match - query) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
   }
   progress.finish();
+  csv.settlePending();  // no frame after the last ones could confirm them
+  for (const openable::LoopCsvFrame& f : csv.frames())
+  {
+    ++status_counts[openable::toString(f.status)];
+    if (f.status != openable::FrameStatus::Published)
+      continue;
+    ++published;
+    published_correct += std::labs(f.match - f.query) <= std::max(0, options.ground_truth_tolerance) ? 1 : 0;
+  }
   if (timings.frames == 0)
     throw Error("no frame of '" + stream_path + "' could be described");
 

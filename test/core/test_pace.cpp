@@ -304,12 +304,18 @@ Published run(const PacedStream& s, const Config& config)
   OnlineDetector detector(config);
   Published out;
   int loops = 0, correct = 0;
+  std::vector<FrameOutcome> outcomes;
   for (size_t t = 0; t < s.frames.size(); ++t)
   {
     FrameInput input;
     input.image = s.frames[t];
     input.stamp = 1.0 + 0.1 * double(t);
-    const FrameOutcome o = detector.process(input);
+    outcomes.push_back(detector.process(input));
+  }
+  outcomes = settled(std::move(outcomes));  // each frame with its final status (confirm_frames)
+  for (size_t t = 0; t < s.frames.size(); ++t)
+  {
+    const FrameOutcome& o = outcomes[t];
     out.stored += o.stored ? 1 : 0;
     loops += s.place[t] >= 0 ? 1 : 0;
     if (!o.published())

@@ -188,7 +188,7 @@ TEST_F(MapSessions, MergedMapsContinueExactlyAsOneContinuedRun)
   // Real loops, not two empty files: day_left's frame 50 + i revisits day_right's 50 + i (session 0, ids
   // 0..199) and night_right's (session 1, ids 200..399); the third session's frames are 400 + i.
   const std::vector<Loop> loops = readLoops(dir_ + "/after_one/loop_closures.csv");
-  EXPECT_GE(loops.size(), 10u);  // measured 12 with config/default.yaml (HOG-B, 10 consistent frames)
+  EXPECT_GE(loops.size(), 8u);  // measured 9 with config/default.yaml (HOG-B, 10 consistent frames, 3 to confirm)
   for (const Loop& loop : loops)
     EXPECT_LE(std::labs(loop.query - 400 + 50 - (loop.match - 200 * loop.match_session)), 3) << loop.query;
 

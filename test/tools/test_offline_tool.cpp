@@ -200,8 +200,10 @@ TEST(OfflineTool, CameraInfoVerifiesLoopClosuresAsANodeletWould)
     ASSERT_TRUE(decisions.count(pair)) << pair;
     if (verified.count(pair))
       continue;
-    EXPECT_EQ(decisions.at(pair), "failed_verification") << pair;
-    ++failed;
+    // Failed itself, or passed but its run ended on a failed frame before confirm_frames more went on with it.
+    const std::string& decided = decisions.at(pair);
+    EXPECT_TRUE(decided == "failed_verification" || decided == "unconfirmed") << pair << ": " << decided;
+    failed += decided == "failed_verification" ? 1 : 0;
   }
   for (const auto& [pair, status] : verified)
     EXPECT_TRUE(unverified.count(pair)) << pair << " published only with verification";

@@ -1,8 +1,9 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
-#include <sstream>
 #include <string>
+#include <vector>
 
 #include "openable/detection/decision_table.h"
 #include "openable/detection/loop_decision.h"
@@ -33,31 +34,33 @@ struct LoopCsvFrame
   uint32_t match_session = 0;  ///< session index of the best match
 };
 
-/// Collects the rows of both files, frame after frame; the caller writes the texts where it wants them.
+/// Collects the rows of both files, frame after frame; the caller writes the texts where it wants them. A row's
+/// status may change after it was added: a pending loop closure (confirm_frames) is published or dropped later.
 class LoopCsvWriter
 {
 public:
   /// panoramic: loop_closures.csv gets the direction and shift columns.
   explicit LoopCsvWriter(bool panoramic);
 
-  /// One frame: a row of decisions.csv, and of loop_closures.csv when it was published.
-  void add(const LoopCsvFrame& frame);
+  /// One frame: a row of decisions.csv, and of loop_closures.csv while it is published. Returns its row.
+  size_t add(const LoopCsvFrame& frame);
+  /// A later word on row `row` (Published once confirmed). Throws Error for a row that was never added.
+  void setStatus(size_t row, FrameStatus status);
+  /// The stream ended: every row still pending becomes unconfirmed (no frame after it could confirm it).
+  void settlePending();
+  const std::vector<LoopCsvFrame>& frames() const
+  {
+    return frames_;
+  }
 
   /// The text of loop_closures.csv so far, header included.
-  std::string loopClosures() const
-  {
-    return loops_.str();
-  }
+  std::string loopClosures() const;
   /// The text of decisions.csv so far, header included.
-  std::string decisions() const
-  {
-    return decisions_.str();
-  }
+  std::string decisions() const;
 
 private:
   bool panoramic_;
-  std::ostringstream loops_;
-  std::ostringstream decisions_;
+  std::vector<LoopCsvFrame> frames_;
 };
 
 /// Reads loop_closures.csv (`query,match,distance,score,status`, maybe more columns such as `direction,shift`)

@@ -24,11 +24,13 @@ enum class FrameStatus
   Inconsistent,        ///< fewer than consistent_frames consecutive frames agree on where the loop is
   FailedVerification,  ///< geometric verification rejected the candidate
   Unverified,          ///< verification is required but could not run (no camera, no features)
+  Pending,             ///< passed every rule; published once confirm_frames more frames go on with its run
+  Unconfirmed,         ///< passed every rule, but its run ended within confirm_frames frames: not published
 };
 
 /// The word used in outputs (loop_closures.csv, decisions.csv, LoopClosure.status): "published",
 /// "not_keyframe", "standstill", "time_jump", "too_early", "excluded", "above_threshold", "not_unique", "inconsistent",
-/// "failed_verification", "unverified".
+/// "failed_verification", "unverified", "pending", "unconfirmed".
 const char* toString(FrameStatus status);
 
 /// How unique a best match is, higher = surer: 1 - best / second best (0 when the second best is 0), 1

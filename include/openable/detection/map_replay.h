@@ -22,7 +22,8 @@ struct MapLoop
 
 /// The loop closures between the frames of a map, as continuing it session after session would publish
 /// them: each session, in map order, matched against the sessions before it and its own past with
-/// `config` (the map's own configuration, usually), decided by LoopDecision. Needs no image: the map holds
+/// `config` (the map's own configuration, usually), decided by LoopDecision and confirmed by LoopConfirmation
+/// (a session's last pending loops are dropped, as at the end of its run). Needs no image: the map holds
 /// the descriptors. Geometric verification, which needs images, is not replayed.
 std::vector<MapLoop> replayLoops(const SessionMap& map, const Config& config);
 

@@ -11,6 +11,8 @@
 #include "openable/matching/frame_metric.h"
 #include "openable/geo_position.h"
 #include "openable/verification/geometric_verifier.h"
+#include "openable/detection/frame_outcome.h"
+#include "openable/detection/loop_confirmation.h"
 #include "openable/detection/loop_decision.h"
 #include "openable/detection/loop_detector.h"
 
@@ -50,36 +52,6 @@ struct OnlineOptions
   bool require_stamps = false;
 };
 
-/// Wall time of each stage of one frame (milliseconds).
-struct StageTimes
-{
-  double preprocess_ms = 0.0;
-  double describe_ms = 0.0;
-  double match_ms = 0.0;  ///< match and decide
-  double verify_ms = 0.0;
-};
-
-/// The outcome of one frame.
-struct FrameOutcome
-{
-  FrameStatus status = FrameStatus::TooEarly;
-  bool stored = false;  ///< added to the history (loop-closure mode) / matched (localisation)
-  FrameInfo query;      ///< the frame as stored (its id and session are set)
-  Detection detection;  ///< candidates, uniqueness, ...
-  float score = 0.0f;   ///< decision score, higher = surer (LoopDecision::score)
-  bool has_match_info = false;
-  FrameInfo match;        ///< the best match's stored info (with its session), when it is still in the map
-  bool verified = false;  ///< `verification` holds an accepted relative pose
-  Verification verification;
-  std::string verification_note;  ///< why verification did not run or failed (empty when verified)
-  StageTimes times;
-
-  bool published() const
-  {
-    return status == FrameStatus::Published;
-  }
-};
-
 /// The one online pipeline: describe -> keyframe -> match -> decide -> verify. The nodelets and
 /// openable_offline both call it, so the offline tool lists exactly what a nodelet publishes.
 ///
@@ -110,6 +82,8 @@ public:
   /// non-finite, negative or 0 stamp in a stamped stream, a non-finite pose or non-unit quaternion, an image
   /// below kMinImageSide a side, a constant frame) throws FrameRefused with its reason. A stamp before the
   /// previous one is not thrown: it comes back as FrameStatus::TimeJump (a caller may reset on it).
+  /// With confirm_frames > 0 a frame that passes every rule comes back Pending, and the frame that confirms it
+  /// carries it, Published, in `confirmed` (LoopConfirmation).
   FrameOutcome process(const FrameInput& input);
 
   /// The input's descriptor as the configuration says: stereo D-LDB from `disparity` or from the pair
@@ -157,6 +131,8 @@ public:
   }
 
 private:
+  /// process() but for the outcome's number.
+  FrameOutcome processFrame(const FrameInput& input);
   std::vector<Patch> patches(const FrameInput& input) const;
   /// patches() of a frame that may become a place: refuses a constant frame (FrameRefused).
   std::vector<Patch> placePatches(const FrameInput& input) const;
@@ -171,10 +147,12 @@ private:
   FrameDescriber describer_;
   LoopDetector detector_;
   LoopDecision decision_;
+  LoopConfirmation confirmation_;
   FrameMetric metric_;
   bool has_last_stored_ = false;
   FrameDescriptor last_stored_;  ///< the last stored frame's descriptor (standstill)
   FrameOutcome last_outcome_;    ///< and its outcome: a frame standing still repeats it
+  uint64_t frames_ = 0;          ///< frames given to process(): the next outcome's `frame`
   std::unique_ptr<GeometricVerifier> verifier_;
   FeatureStore features_;
   double last_stamp_ = 0.0;

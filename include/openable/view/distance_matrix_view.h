@@ -91,9 +91,10 @@ public:
   /// (NaN where no comparison was made). Query frames are counted in the order of the calls. Reference ids
   /// before the first one ever given (frames evicted before the view started) are ignored.
   void addRow(uint64_t first_reference_id, const std::vector<float>& row);
-  /// Marks an accepted loop between the last row added and reference frame `match_id`. Only the last
-  /// max_loops loops are kept (10000 by default), so render() stays bounded.
-  void addLoop(uint64_t match_id);
+  /// Marks an accepted loop between a row added `rows_ago` rows before the last one (0: the last) and
+  /// reference frame `match_id` (a confirmed loop closure arrives a few rows late). Only the last max_loops
+  /// loops are kept (10000 by default), so render() stays bounded.
+  void addLoop(uint64_t match_id, uint64_t rows_ago = 0);
   void setMaxLoops(size_t max_loops);
   size_t loops() const
   {

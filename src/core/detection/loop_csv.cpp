@@ -92,8 +92,8 @@ Columns findColumns(const std::string& header, const std::string& path)
 }
 
 // FrameStatus is the one list of statuses: the words openable_offline writes come from toString.
-// (Unverified must stay the last enumerator, and they must count from 0.)
-constexpr int kLastStatus = static_cast<int>(FrameStatus::Unverified);
+// (Unconfirmed must stay the last enumerator, and they must count from 0.)
+constexpr int kLastStatus = static_cast<int>(FrameStatus::Unconfirmed);
 
 bool isStatusWord(const std::string& word)
 {
@@ -181,26 +181,56 @@ DecisionRow parseRow(const std::vector<std::string>& f, const Columns& c, const 
 
 }  // namespace
 
-LoopCsvWriter::LoopCsvWriter(bool panoramic) : panoramic_(panoramic)
+LoopCsvWriter::LoopCsvWriter(bool panoramic) : panoramic_(panoramic) {}
+
+size_t LoopCsvWriter::add(const LoopCsvFrame& frame)
 {
-  loops_ << "query,match,distance,score,status" << (panoramic_ ? ",direction,shift" : "")
-         << ",query_session,match_session\n";
-  decisions_ << "query,match,distance,score,status,accepted,pace\n";
+  frames_.push_back(frame);
+  return frames_.size() - 1;
 }
 
-void LoopCsvWriter::add(const LoopCsvFrame& f)
+void LoopCsvWriter::setStatus(size_t row, FrameStatus status)
 {
-  const bool published = f.status == FrameStatus::Published;
-  const auto known = [&f](float v) { return formatFloat(f.has_candidates ? v : NAN); };
-  decisions_ << f.query << "," << f.match << "," << known(f.distance) << "," << known(f.score) << ","
-             << toString(f.status) << "," << (published ? 1 : 0) << "," << known(f.pace) << "\n";
-  if (!published)
-    return;
-  loops_ << f.query << "," << f.match << "," << formatFloat(f.distance) << "," << formatFloat(f.score)
-         << ",published";
-  if (panoramic_)
-    loops_ << "," << f.direction << "," << f.shift;
-  loops_ << "," << f.query_session << "," << f.match_session << "\n";
+  if (row >= frames_.size())
+    throw Error("loop decisions: no row " + std::to_string(row) + " to set (" + std::to_string(frames_.size()) +
+                " rows)");
+  frames_[row].status = status;
+}
+
+void LoopCsvWriter::settlePending()
+{
+  for (LoopCsvFrame& f : frames_)
+    if (f.status == FrameStatus::Pending)
+      f.status = FrameStatus::Unconfirmed;
+}
+
+std::string LoopCsvWriter::loopClosures() const
+{
+  std::ostringstream out;
+  out << "query,match,distance,score,status" << (panoramic_ ? ",direction,shift" : "") << ",query_session,match_session\n";
+  for (const LoopCsvFrame& f : frames_)
+  {
+    if (f.status != FrameStatus::Published)
+      continue;
+    out << f.query << "," << f.match << "," << formatFloat(f.distance) << "," << formatFloat(f.score) << ",published";
+    if (panoramic_)
+      out << "," << f.direction << "," << f.shift;
+    out << "," << f.query_session << "," << f.match_session << "\n";
+  }
+  return out.str();
+}
+
+std::string LoopCsvWriter::decisions() const
+{
+  std::ostringstream out;
+  out << "query,match,distance,score,status,accepted,pace\n";
+  for (const LoopCsvFrame& f : frames_)
+  {
+    const auto known = [&f](float v) { return formatFloat(f.has_candidates ? v : NAN); };
+    out << f.query << "," << f.match << "," << known(f.distance) << "," << known(f.score) << "," << toString(f.status)
+        << "," << (f.status == FrameStatus::Published ? 1 : 0) << "," << known(f.pace) << "\n";
+  }
+  return out.str();
 }
 
 DecisionTable loadDecisionTable(const std::string& path)

@@ -32,6 +32,10 @@ const char* toString(FrameStatus status)
       return "failed_verification";
     case FrameStatus::Unverified:
       return "unverified";
+    case FrameStatus::Pending:
+      return "pending";
+    case FrameStatus::Unconfirmed:
+      return "unconfirmed";
   }
   return "unknown";
 }

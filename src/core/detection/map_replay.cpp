@@ -1,5 +1,7 @@
 #include "openable/detection/map_replay.h"
 
+#include "openable/detection/frame_outcome.h"
+#include "openable/detection/loop_confirmation.h"
 #include "openable/detection/loop_detector.h"
 
 namespace openable
@@ -15,21 +17,31 @@ std::vector<MapLoop> replayLoops(const SessionMap& map, const Config& config)
   {
     LoopDetector detector(replay, grown, MapMode::Continue, map.session(s));
     LoopDecision decision(replay);
+    LoopConfirmation confirmation(replay.confirm_frames);  // as the session's run confirmed its loops
     const PlaceDatabase& frames = map.frames(s);
     for (size_t p = 0; p < frames.size(); ++p)
     {
       const FrameDescriptor query(frames.descriptor(p), frames.descriptor(p) + frames.layout().frameWords());
-      const Detection d = detector.process(query, frames.info(p));
-      if (decision.decide(d) != FrameStatus::Published)
-        continue;
-      MapLoop loop;
-      loop.query_session = s;
-      loop.query_id = frames.firstId() + p;
-      loop.match_session = d.best.session;
-      loop.match_id = map.frames(d.best.session).firstId() + d.best.position;
-      loop.distance = d.best.distance;
-      loop.score = decision.score(d);
-      loops.push_back(loop);
+      FrameOutcome outcome;
+      outcome.frame = p;
+      outcome.detection = detector.process(query, frames.info(p));
+      outcome.status = decision.decide(outcome.detection);
+      outcome.score = decision.score(outcome.detection);
+      std::vector<FrameOutcome> published = confirmation.stored(outcome);
+      if (outcome.published())  // confirm_frames 0
+        published.push_back(outcome);
+      for (const FrameOutcome& o : published)
+      {
+        const Detection& d = o.detection;
+        MapLoop loop;
+        loop.query_session = s;
+        loop.query_id = frames.firstId() + o.frame;
+        loop.match_session = d.best.session;
+        loop.match_id = map.frames(d.best.session).firstId() + d.best.position;
+        loop.distance = d.best.distance;
+        loop.score = o.score;
+        loops.push_back(loop);
+      }
     }
     grown = detector.map();
   }

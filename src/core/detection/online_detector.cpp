@@ -69,6 +69,7 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, const OnlineOptions& o
     describer_(config),
     detector_(config),
     decision_(*config),
+    confirmation_(config->confirm_frames),
     metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
@@ -86,6 +87,7 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, PlaceDatabase referenc
     describer_(config),
     detector_(config, nonEmpty(std::move(reference_map))),
     decision_(*config),
+    confirmation_(config->confirm_frames),
     metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
@@ -105,6 +107,7 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, SessionMap map, MapMod
     describer_(config),
     detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, std::move(session)),
     decision_(*config),
+    confirmation_(config->confirm_frames),
     metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
@@ -192,6 +195,13 @@ bool OnlineDetector::standsStill(const FrameDescriptor& descriptor, const std::v
 
 FrameOutcome OnlineDetector::process(const FrameInput& original)
 {
+  FrameOutcome outcome = processFrame(original);
+  outcome.frame = frames_++;
+  return outcome;
+}
+
+FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
+{
   // The input contract (input_contract.h): bad stamps and poses are refused before anything changes.
   const InputProblem stamp = checkStamp(original.stamp, last_stamp_, last_stamp_ > 0.0, options_.require_stamps);
   if (stamp.reason == "stamp went backwards")
@@ -252,8 +262,10 @@ FrameOutcome OnlineDetector::process(const FrameInput& original)
     repeated.query.has_pose = input.has_pose;
     repeated.query.pose = input.pose;
     repeated.times = outcome.times;
-    if (!repeated.published())
+    repeated.frame = frames_;
+    if (!repeated.published() && repeated.status != FrameStatus::Pending)
       repeated.status = FrameStatus::Standstill;
+    confirmation_.repeated(repeated);  // a pending loop closure's repeats wait with it
     return repeated;
   }
 
@@ -280,9 +292,12 @@ FrameOutcome OnlineDetector::process(const FrameInput& original)
   start = std::chrono::steady_clock::now();
   verify(input, outcome);
   outcome.times.verify_ms = millisecondsSince(start);
+  outcome.frame = frames_;
+  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome);
   has_last_stored_ = true;
   last_stored_ = descriptor;
   last_outcome_ = outcome;
+  outcome.confirmed = std::move(confirmed);
   return outcome;
 }
 
@@ -362,6 +377,7 @@ void OnlineDetector::updateConfig(const Config& config)
     throw Error("cannot change " + changed + " while running: the verifier is built once; restart the detector");
   detector_.updateMatching(config);  // validates and refuses descriptor keys
   decision_.setOptions(DecisionOptions::from(config));
+  confirmation_.setFrames(config.confirm_frames);
   config_ = config;
 }
 
@@ -369,6 +385,7 @@ void OnlineDetector::reset()
 {
   detector_.reset();
   decision_.reset();
+  confirmation_.reset();
   features_.clear();
   last_stamp_ = 0.0;
   has_keyframe_pose_ = false;

@@ -261,13 +261,13 @@ void DistanceMatrixView::addRow(uint64_t first_reference_id, const std::vector<f
   }
 }
 
-void DistanceMatrixView::addLoop(uint64_t match_id)
+void DistanceMatrixView::addLoop(uint64_t match_id, uint64_t rows_ago)
 {
-  if (queries_ == 0 || max_loops_ == 0)
+  if (queries_ <= rows_ago || max_loops_ == 0)
   {
     return;
   }
-  loops_.emplace_back(queries_ - 1, match_id);
+  loops_.emplace_back(queries_ - 1 - rows_ago, match_id);
   while (loops_.size() > max_loops_)
   {
     loops_.pop_front();

@@ -1,0 +1,65 @@
+#pragma once
+
+#include <cstddef>
+#include <deque>
+#include <unordered_map>
+#include <vector>
+
+#include "openable/detection/frame_outcome.h"
+
+namespace openable
+{
+/// Publishes a frame's loop closure only once the next `frames` stored frames went on with its run.
+///
+/// Why: at a changing pace the end of the best sequence lags (or leads) the true place by a few places, and
+/// the revisit's next frames show it: the run breaks (its match jumps back onto the route) within a frame
+/// or two. Waiting for them drops those loops. Measured on the pace streams of doc/results.md (simulated
+/// on decisions.csv, then run): Gardens Point, 22 streams, 35 -> 6 wrong at 3 frames, recall 0.254 -> 0.232;
+/// Nordland, 8 streams, 327 -> 178 wrong, recall 0.478 -> 0.463 (the last frames of every run are lost). A
+/// loop closure arrives `frames` keyframes late, with its own frame's stamp.
+///
+/// A frame standing still repeats the last stored frame's decision: while that one is pending, the repeats
+/// wait with it (up to kMaxRepeats) and are confirmed or dropped with it.
+class LoopConfirmation
+{
+public:
+  /// Repeats of one pending frame kept for its confirmation (a standstill of about 5 minutes at 10 Hz).
+  static constexpr size_t kMaxRepeats = 3000;
+
+  /// frames: 0 publishes at once (the outcome passes through unchanged).
+  explicit LoopConfirmation(int frames);
+
+  /// A stored frame, after the decision and verification. A Published outcome becomes Pending (frames > 0).
+  /// Returns the earlier outcomes it confirms, oldest first, each Published; when the frame is not Published
+  /// itself, the run ended and every pending one is dropped.
+  std::vector<FrameOutcome> stored(FrameOutcome& outcome);
+  /// A frame standing still that repeats the last stored one's Pending outcome: it waits with it.
+  void repeated(const FrameOutcome& outcome);
+  /// Drops what is pending (a reset of the stream); new `frames` with setFrames.
+  void reset();
+  void setFrames(int frames);
+
+  int frames() const
+  {
+    return frames_;
+  }
+  /// Outcomes waiting, repeats included.
+  size_t pending() const;
+
+private:
+  struct Waiting
+  {
+    std::vector<FrameOutcome> outcomes;  ///< the stored frame, then its repeats
+    int confirmations = 0;               ///< stored frames since it that went on with its run
+  };
+  int frames_;
+  std::deque<Waiting> waiting_;
+};
+
+/// A stream's outcomes, in the order process() gave them, with every status final: a Pending frame that a
+/// later frame confirmed is Published (with the confirmed copy's fields), one that none confirmed is
+/// Unconfirmed. `confirmed` lists are emptied. What openable_offline writes to decisions.csv, for tests and tools
+/// that score a whole stream.
+std::vector<FrameOutcome> settled(std::vector<FrameOutcome> outcomes);
+
+}  // namespace openable
