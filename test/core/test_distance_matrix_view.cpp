@@ -190,6 +190,26 @@ TEST(DistanceMatrixView, RenderIsBoundedColouredAndMarksLoops)
   EXPECT_THROW(view.render(options), openable::Error);
 }
 
+TEST(DistanceMatrixView, ALoopConfirmedRowsLaterIsDrawnOnItsOwnRow)
+{
+  // A confirmed loop closure (confirm_frames) arrives with a later row: marked rows_ago rows back, it is the
+  // same picture as marked with its own row.
+  DistanceMatrixView at_once(64), later(64);
+  for (int t = 0; t < 20; ++t)
+  {
+    at_once.addRow(0, streamRow(t, 3, t == 15 ? 2 : -1));
+    later.addRow(0, streamRow(t, 3, t == 15 ? 2 : -1));
+    if (t == 15)
+      at_once.addLoop(2);
+    if (t == 18)
+      later.addLoop(2, 3);
+  }
+  EXPECT_EQ(later.loops(), 1u);
+  EXPECT_EQ(cv::norm(at_once.render({}), later.render({}), cv::NORM_L1), 0.0);
+  later.addLoop(2, 20);  // before the first row: nothing to mark
+  EXPECT_EQ(later.loops(), 1u);
+}
+
 TEST(DistanceMatrixView, RenderKeepsItsSizeWhileTheHistoryGrowsAndIsPooled)
 {
   // The picture used to be the cells integer-upscaled: 504, 506, ... pixels, then 257 after a pooling;
