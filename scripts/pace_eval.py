@@ -4,7 +4,7 @@
 it published with openable_eval against the stream's own ground truth.
 
   scripts/pace_eval.py --first DIR --second DIR --config FILE.yaml --out DIR [--profile P]... [--first-profile P]
-                       [--tolerance T] [--bin DIR] [--set key=value]... [--jobs N] [--markdown]
+                       [--tolerance T] [--frames N] [--bin DIR] [--set key=value]... [--jobs N] [--markdown] [--misses]
 
 A profile resamples a traversal of n frames (no synthetic image: frames are skipped or repeated):
   1x            every frame once (the first pass's pace)
@@ -18,7 +18,9 @@ A profile resamples a traversal of n frames (no synthetic image: frames are skip
 Ground truth: a frame of the second traversal that shows place k is a true loop with every frame of the first
 traversal that shows a place within T of k (openable_eval --pairs). The first traversal has no loop.
 
-Prints one line per profile: published, wrong, precision, recall (and --markdown, a table row).
+--frames N takes the first N frames of each traversal (a short route). Prints one line per profile: published,
+wrong, precision, recall (and --markdown, a table row); --misses adds where the recall went: the statuses (in
+decisions.csv) of the frames that have a true loop and got no right one published.
 """
 import argparse
 import concurrent.futures
@@ -101,7 +103,7 @@ def images(folder):
 def build_stream(args, profile, out):
     """Writes out/stream/ (symbolic links to the real frames) and out/pairs.txt; returns the frame count."""
     first, second = images(args.first), images(args.second)
-    n = min(len(first), len(second))
+    n = min(len(first), len(second), args.frames or len(first))
     first_places = profile_indices(args.first_profile, n)
     second_places = profile_indices(profile, n)
     stream = os.path.join(out, 'stream')
@@ -136,7 +138,27 @@ def run(args, profile):
                     '--output', os.path.join(out, 'eval')], check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, 'eval', 'metrics.json')) as f:
         metrics = json.load(f)
-    return profile, frames, metrics
+    return profile, frames, metrics, misses(out)
+
+
+def misses(out):
+    """Status counts of the frames with a true loop that got no right loop closure published."""
+    truth = {}
+    with open(os.path.join(out, 'pairs.txt')) as f:
+        for line in f:
+            if not line.startswith('#'):
+                query, match = map(int, line.split())
+                truth.setdefault(query, set()).add(match)
+    counts = {}
+    with open(os.path.join(out, 'run', 'decisions.csv')) as f:
+        header = f.readline().strip().split(',')
+        for line in f:
+            row = dict(zip(header, line.strip().split(',')))
+            query, match = int(row['query']), int(row['match'])
+            if query in truth and not (row['status'] == 'published' and match in truth[query]):
+                status = row['status'] if row['status'] != 'published' else 'published_wrong'
+                counts[status] = counts.get(status, 0) + 1
+    return counts
 
 
 def main():
@@ -148,6 +170,8 @@ def main():
     parser.add_argument('--profile', action='append', default=[])
     parser.add_argument('--first-profile', default='1x')
     parser.add_argument('--tolerance', type=int, default=2)
+    parser.add_argument('--frames', type=int, default=0)
+    parser.add_argument('--misses', action='store_true')
     parser.add_argument('--bin', default=os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'build', 'ws',
                                                       'devel', 'lib', 'openable_ros'))
     parser.add_argument('--set', action='append', default=[])
@@ -159,14 +183,17 @@ def main():
         profile_indices(p, 10)  # refuse an unknown profile before running anything
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         results = list(pool.map(lambda p: run(args, p), profiles))
-    for profile, frames, m in results:
+    for profile, frames, m, missed in results:
         published, wrong = int(m['published']), int(m['wrong'])
         precision = m['precision'] if published else 1.0
+        where = ', '.join('%s %d' % (k, v) for k, v in sorted(missed.items(), key=lambda kv: -kv[1]))
         if args.markdown:
-            print('| %s | %d / %d / %.3f / %.3f |' % (profile, published, wrong, precision, m['recall']))
+            print('| %s | %d / %d / %.3f / %.3f |%s' % (profile, published, wrong, precision, m['recall'],
+                                                        ' %s |' % where if args.misses else ''))
         else:
-            print('%-10s frames %5d  published %5d  wrong %4d  precision %.3f  recall %.3f'
-                  % (profile, frames, published, wrong, precision, m['recall']))
+            print('%-10s frames %5d  published %5d  wrong %4d  precision %.3f  recall %.3f%s'
+                  % (profile, frames, published, wrong, precision, m['recall'],
+                     '  misses: ' + where if args.misses else ''))
     sys.stdout.flush()
 
 
