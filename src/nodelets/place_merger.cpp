@@ -3,6 +3,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <nodelet/nodelet.h>
 
+#include <algorithm>
 #include <memory>
 #include <mutex>
 #include <pluginlib/class_list_macros.hpp>
@@ -96,6 +97,14 @@ private:
         {
           ++loops_;
           loop_pub_.publish(LoopClosureConstPtr(loop));
+        }
+        // Earlier queries this one confirmed (confirm_frames), each with its own stamp.
+        for (const openable::MergedOutcome& earlier : outcome.confirmed)
+        {
+          std_msgs::Header earlier_header = header;
+          earlier_header.stamp = ros::Time(std::max(0.0, earlier.query_stamp));
+          ++loops_;
+          loop_pub_.publish(LoopClosureConstPtr(makeLoopClosure(earlier_header, earlier, *merger_)));
         }
       }
       catch (const std::exception& e)

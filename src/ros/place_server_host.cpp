@@ -1,5 +1,6 @@
 #include "openable_ros/place_server_host.h"
 
+#include <algorithm>
 #include <fstream>
 
 #include "openable_ros/place_messages.h"
@@ -174,6 +175,14 @@ void PlaceServerHost::descriptorCallback(const PlaceDescriptorConstPtr& msg, con
   {
     ++loops_;
     loop_pub_.publish(LoopClosureConstPtr(loop));
+  }
+  // Earlier queries this one confirmed (confirm_frames), each with its own stamp.
+  for (const openable::MergedOutcome& earlier : outcome.confirmed)
+  {
+    std_msgs::Header header = msg->header;
+    header.stamp = ros::Time(std::max(0.0, earlier.query_stamp));
+    ++loops_;
+    loop_pub_.publish(LoopClosureConstPtr(makeLoopClosure(header, earlier, *merger_)));
   }
 }
 

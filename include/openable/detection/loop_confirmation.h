@@ -2,10 +2,11 @@
 
 #include <cstddef>
 #include <deque>
-#include <unordered_map>
+#include <string>
 #include <vector>
 
 #include "openable/detection/frame_outcome.h"
+#include "openable/error.h"
 
 namespace openable
 {
@@ -20,41 +21,99 @@ namespace openable
 ///
 /// A frame standing still repeats the last stored frame's decision: while that one is pending, the repeats
 /// wait with it (up to kMaxRepeats) and are confirmed or dropped with it.
-class LoopConfirmation
+///
+/// Outcome: what a pipeline decides for one frame, with a FrameStatus `status` and `published()`
+/// (FrameOutcome in OnlineDetector and the map replay, MergedOutcome in the place servers' CandidateMerger).
+template <typename Outcome>
+class BasicLoopConfirmation
 {
 public:
   /// Repeats of one pending frame kept for its confirmation (a standstill of about 5 minutes at 10 Hz).
   static constexpr size_t kMaxRepeats = 3000;
 
-  /// frames: 0 publishes at once (the outcome passes through unchanged).
-  explicit LoopConfirmation(int frames);
+  /// frames: 0 publishes at once (the outcome passes through unchanged). Throws Error when negative.
+  explicit BasicLoopConfirmation(int frames)
+  {
+    setFrames(frames);
+  }
 
   /// A stored frame, after the decision and verification. A Published outcome becomes Pending (frames > 0).
   /// Returns the earlier outcomes it confirms, oldest first, each Published; when the frame is not Published
   /// itself, the run ended and every pending one is dropped.
-  std::vector<FrameOutcome> stored(FrameOutcome& outcome);
+  std::vector<Outcome> stored(Outcome& outcome)
+  {
+    std::vector<Outcome> confirmed;
+    if (frames_ == 0)
+      return confirmed;
+    if (!outcome.published())
+    {
+      waiting_.clear();  // the run ended (or never was): what waited for it is not confirmed
+      return confirmed;
+    }
+    for (Waiting& w : waiting_)
+      ++w.confirmations;
+    while (!waiting_.empty() && waiting_.front().confirmations >= frames_)
+    {
+      for (Outcome& o : waiting_.front().outcomes)
+      {
+        o.status = FrameStatus::Published;
+        confirmed.push_back(std::move(o));
+      }
+      waiting_.pop_front();
+    }
+    outcome.status = FrameStatus::Pending;
+    waiting_.push_back(Waiting{{outcome}, 0});
+    return confirmed;
+  }
+
   /// A frame standing still that repeats the last stored one's Pending outcome: it waits with it.
-  void repeated(const FrameOutcome& outcome);
-  /// Drops what is pending (a reset of the stream); new `frames` with setFrames.
-  void reset();
-  void setFrames(int frames);
+  void repeated(const Outcome& outcome)
+  {
+    if (outcome.status != FrameStatus::Pending || waiting_.empty())
+      return;
+    std::vector<Outcome>& outcomes = waiting_.back().outcomes;
+    if (outcomes.size() <= kMaxRepeats)
+      outcomes.push_back(outcome);
+  }
+
+  /// Drops what is pending (a reset of the stream).
+  void reset()
+  {
+    waiting_.clear();
+  }
+  /// New `frames`; what is pending is dropped. Throws Error when negative.
+  void setFrames(int frames)
+  {
+    if (frames < 0)
+      throw Error("confirm_frames " + std::to_string(frames) + " is out of range; expected frames >= 0");
+    frames_ = frames;
+    reset();
+  }
 
   int frames() const
   {
     return frames_;
   }
   /// Outcomes waiting, repeats included.
-  size_t pending() const;
+  size_t pending() const
+  {
+    size_t count = 0;
+    for (const Waiting& w : waiting_)
+      count += w.outcomes.size();
+    return count;
+  }
 
 private:
   struct Waiting
   {
-    std::vector<FrameOutcome> outcomes;  ///< the stored frame, then its repeats
-    int confirmations = 0;               ///< stored frames since it that went on with its run
+    std::vector<Outcome> outcomes;  ///< the stored frame, then its repeats
+    int confirmations = 0;          ///< stored frames since it that went on with its run
   };
-  int frames_;
+  int frames_ = 0;
   std::deque<Waiting> waiting_;
 };
+
+using LoopConfirmation = BasicLoopConfirmation<FrameOutcome>;
 
 /// A stream's outcomes, in the order process() gave them, with every status final: a Pending frame that a
 /// later frame confirmed is Published (with the confirmed copy's fields), one that none confirmed is

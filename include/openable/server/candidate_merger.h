@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "openable/config.h"
+#include "openable/detection/loop_confirmation.h"
 #include "openable/detection/loop_decision.h"
 #include "openable/server/place_server.h"
 
@@ -29,6 +30,9 @@ struct MergedOutcome
   FrameStatus status = FrameStatus::TooEarly;
   float score = 0.0f;
   size_t servers = 0;  ///< answers merged
+  /// Earlier queries of the same stream that this one confirmed (confirm_frames), now Published: publish
+  /// these, each with its own query stamp, besides this query when it is published itself (confirm_frames 0).
+  std::vector<MergedOutcome> confirmed;
 
   bool published() const
   {
@@ -37,7 +41,8 @@ struct MergedOutcome
 };
 
 /// Combines what several PlaceServers found for the same query into what one server holding all their
-/// sessions would have found, then decides with one LoopDecision per query stream.
+/// sessions would have found, then decides with one LoopDecision and one LoopConfirmation per query stream
+/// (a loop closure is published once confirm_frames more queries of its stream go on with its run).
 ///
 /// Why this is exact: every session lives on one server, and MapMatcher picks a session's distinct places
 /// without looking at other sessions, so the global best places are the union of each server's best,
@@ -70,6 +75,7 @@ private:
   std::vector<std::string> names_;
   std::map<std::string, uint32_t> indices_;
   std::map<std::string, LoopDecision> decisions_;  ///< one per query stream: a run never mixes robots
+  std::map<std::string, BasicLoopConfirmation<MergedOutcome>> confirmations_;  ///< likewise
 };
 
 }  // namespace openable

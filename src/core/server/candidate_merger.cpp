@@ -89,6 +89,11 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
   LoopDecision& decision = decisions_.emplace(out.query_session, LoopDecision(config_)).first->second;
   out.status = decision.decide(d);
   out.score = decision.score(d);
+  auto& confirmation =
+      confirmations_.emplace(out.query_session, BasicLoopConfirmation<MergedOutcome>(config_.confirm_frames))
+          .first->second;
+  std::vector<MergedOutcome> confirmed = confirmation.stored(out);
+  out.confirmed = std::move(confirmed);
   return out;
 }
 
