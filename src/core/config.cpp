@@ -247,6 +247,7 @@ Config Config::paper()
   c.pace_tolerance = 1;
   c.standstill_distance = 0.0;
   c.consistent_frames = 4;
+  c.min_candidates = 60;
   c.continue_uniqueness = 1.0;
   c.confirm_frames = 0;
   return c;
