@@ -84,6 +84,8 @@ public:
 private:
   Detector(ros::NodeHandle nh, ros::NodeHandle pnh, std::string name, RosParameters parameters);
   void publish(const std_msgs::Header& header, const openable::FrameOutcome& outcome);
+  /// Frames counted under `from` that turned out `to` (a pending loop closure confirmed or dropped).
+  void moveStatus(openable::FrameStatus from, openable::FrameStatus to, uint64_t frames);
   /// One loop closure out: the topic, the counters, the matrix and the markers (`current`: the frame being handled).
   void publishLoop(const LoopClosurePtr& msg, const openable::FrameOutcome& loop, const openable::FrameOutcome& current);
   /// The bookkeeping of a stored frame: counters, descriptors out, markers, the distance matrix's row.
@@ -119,6 +121,7 @@ private:
   ros::Publisher loop_pub_;
   ros::Publisher decisions_pub_;
   FrameCounters counters_;
+  uint64_t counted_dropped_ = 0;  ///< detector_->confirmation().dropped() already moved to "unconfirmed"
   openable::SequenceGaps gaps_;
   openable::FixHistory fixes_;
   ros::Subscriber fix_sub_;

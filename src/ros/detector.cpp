@@ -1,5 +1,6 @@
 #include "openable_ros/detector.h"
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <fstream>
@@ -292,20 +293,32 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
   if (outcome.published())
     publishLoop(msg, outcome, outcome);
   // Loop closures of earlier frames that this one confirmed (confirm_frames): each with its own frame's stamp.
+  // Their frames were counted pending; they count as decided now, as decisions.csv has them in the end.
   for (const openable::FrameOutcome& earlier : outcome.confirmed)
   {
     std_msgs::Header earlier_header = header;
     if (earlier.query.stamp > 0.0)
       earlier_header.stamp = ros::Time(earlier.query.stamp);
-    ++counters_.statuses[openable::toString(earlier.status)];
+    moveStatus(openable::FrameStatus::Pending, earlier.status, 1);
     publishLoop(makeLoopClosure(earlier_header, earlier), earlier, outcome);
   }
+  const uint64_t dropped = detector_->confirmation().dropped();
+  if (dropped > counted_dropped_)
+    moveStatus(openable::FrameStatus::Pending, openable::FrameStatus::Unconfirmed, dropped - counted_dropped_);
+  counted_dropped_ = dropped;
   if (!outcome.stored)
     return;
   const std::string error = matrix_->publish(header, detector_->config());
   if (!error.empty())
     warnThrottled("render", kWarnPeriod, error);
   markers_->publish(header.stamp, outcome.published() || !outcome.confirmed.empty());
+}
+
+void Detector::moveStatus(openable::FrameStatus from, openable::FrameStatus to, uint64_t frames)
+{
+  uint64_t& pending = counters_.statuses[openable::toString(from)];
+  pending -= std::min(pending, frames);
+  counters_.statuses[openable::toString(to)] += frames;
 }
 
 void Detector::publishLoop(const LoopClosurePtr& msg, const openable::FrameOutcome& loop,

@@ -116,6 +116,23 @@ TEST(LoopConfirmation, PublishesAFrameOnceThreeMoreFramesGoOnWithItsRun)
                                       FrameStatus::Unconfirmed, FrameStatus::Unconfirmed, FrameStatus::NotUnique}));
 }
 
+TEST(LoopConfirmation, CountsWhatARunThatEndedLeftUnconfirmed)
+{
+  LoopConfirmation confirmation(3);
+  FrameOutcome passed, failed;
+  for (int i = 0; i < 5; ++i)
+  {
+    passed.status = FrameStatus::Published;
+    confirmation.stored(passed);
+  }
+  confirmation.repeated(passed);  // a standstill repeating the last (pending) frame
+  EXPECT_EQ(confirmation.pending(), 4u);  // frames 2, 3, 4 and the repeat; 0 and 1 went out
+  failed.status = FrameStatus::NotUnique;
+  confirmation.stored(failed);
+  EXPECT_EQ(confirmation.dropped(), 4u);
+  EXPECT_EQ(confirmation.pending(), 0u);
+}
+
 TEST(LoopConfirmation, ZeroFramesPublishesAtOnce)
 {
   const std::vector<Step> steps = {Step::Passed, Step::Failed, Step::Passed, Step::Repeat};

@@ -127,6 +127,10 @@ TEST(MonoDetectorPace, StandstillAndDoubleSpeedPublishOnlyRightLoops)
   const int night_images = (frames + step - 1) / step;
   EXPECT_EQ(diagnostics.number("frames stored"), frames + night_images) << "of " << total << " frames";
   ASSERT_TRUE(waitFor([&] { return diagnostics.number("loop closures") == long(recorder.loops().size()); }, 10.0));
+  // Every frame counted once: a confirmed loop closure's frame (and each repeat of it) moves from pending to
+  // published, one whose run ended to unconfirmed; only the last frames of the stream may still wait.
+  EXPECT_EQ(diagnostics.number("frames published"), long(recorder.loops().size()));
+  EXPECT_LE(diagnostics.number("frames pending"), 3);
 
   int correct = 0;
   int wrong = 0;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <string>
 #include <vector>
@@ -47,7 +48,8 @@ public:
       return confirmed;
     if (!outcome.published())
     {
-      waiting_.clear();  // the run ended (or never was): what waited for it is not confirmed
+      dropped_ += pending();  // the run ended (or never was): what waited for it is not confirmed
+      waiting_.clear();
       return confirmed;
     }
     for (Waiting& w : waiting_)
@@ -94,6 +96,12 @@ public:
   {
     return frames_;
   }
+  /// Outcomes, repeats included, whose run ended before they were confirmed, since construction (a reset
+  /// or new frames drop what is pending without counting it).
+  uint64_t dropped() const
+  {
+    return dropped_;
+  }
   /// Outcomes waiting, repeats included.
   size_t pending() const
   {
@@ -110,6 +118,7 @@ private:
     int confirmations = 0;          ///< stored frames since it that went on with its run
   };
   int frames_ = 0;
+  uint64_t dropped_ = 0;
   std::deque<Waiting> waiting_;
 };
 

@@ -125,6 +125,10 @@ public:
   {
     return detector_;
   }
+  const LoopConfirmation& confirmation() const
+  {
+    return confirmation_;
+  }
   bool localisationMode() const
   {
     return detector_.localisationMode();
