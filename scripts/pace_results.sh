@@ -6,21 +6,10 @@
 #
 # Needs ../shared/data beside the package. About 10 minutes on a 2-core machine. Prints Markdown on stdout.
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-bin="$here/build/ws/devel/lib/openable_ros"
 out=/tmp/openable_pace_results
-jobs=2
-while [[ $# -gt 0 ]]; do
-  case "$1" in
-    --bin) bin="$2"; shift 2 ;;
-    --out) out="$2"; shift 2 ;;
-    --jobs) jobs="$2"; shift 2 ;;
-    -h|--help) sed -n 2,7p "$0"; exit 0 ;;
-    *) echo "unknown argument '$1' (see --help)" >&2; exit 2 ;;
-  esac
-done
-data="$here/../shared/data"
-[[ -d "$data/gardens_point" && -d "$data/nordland" ]] || { echo "no ../shared/data beside the package" >&2; exit 1; }
+usage=2,7p
+# shellcheck source=scripts/pace_tables_common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/pace_tables_common.sh"
 profiles=(1x 2x 3x 0.5x 0.33x stops:25 stops:100 stops:200 varying:100 ramp:0.5,2 random:1)
 args=()
 for p in "${profiles[@]}"; do args+=(--profile "$p"); done
@@ -37,8 +26,6 @@ run() {  # name first second tolerance config [first-profile]
     --out "$out/$config/$(echo "$name" | tr -c 'A-Za-z0-9\n' _)" "${args[@]}"
 }
 
-gp="$data/gardens_point"
-nl="$data/nordland"
 for config in default gardens_point nordland; do
   run "Gardens Point day_right then night_right" "$gp/day_right" "$gp/night_right" 2 "$config"
   run "Nordland summer then winter" "$nl/summer" "$nl/winter" 1 "$config"

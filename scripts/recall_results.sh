@@ -8,23 +8,10 @@
 #
 # Needs ../shared/data beside the package. About 10 minutes on a 2-core machine. Prints Markdown on stdout.
 set -euo pipefail
-here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-bin="$here/build/ws/devel/lib/openable_ros"
 out=/tmp/openable_recall_results
-jobs=2
-while [[ $# -gt 0 ]]; do
-  case "$1" in
-    --bin) bin="$2"; shift 2 ;;
-    --out) out="$2"; shift 2 ;;
-    --jobs) jobs="$2"; shift 2 ;;
-    -h|--help) sed -n 2,9p "$0"; exit 0 ;;
-    *) echo "unknown argument '$1' (see --help)" >&2; exit 2 ;;
-  esac
-done
-data="$here/../shared/data"
-[[ -d "$data/gardens_point" && -d "$data/nordland" ]] || { echo "no ../shared/data beside the package" >&2; exit 1; }
-gp="$data/gardens_point"
-nl="$data/nordland"
+usage=2,9p
+# shellcheck source=scripts/pace_tables_common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/pace_tables_common.sh"
 
 echo "| stream | config | pace | published / wrong / precision / recall | frames with a true loop and none: status |"
 echo "|---|---|---|---|---|"

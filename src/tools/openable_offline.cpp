@@ -219,8 +219,6 @@ int run(const Options& options)
   std::vector<std::vector<float>> rows;  // per stream file: distances by frame number (empty = not described)
   const bool panoramic = config.camera() == openable::CameraType::Panoramic;
   openable::LoopCsvWriter csv(panoramic);
-  constexpr size_t kNoRow = static_cast<size_t>(-1);
-  std::vector<size_t> row_of_frame;  // by FrameOutcome::frame
   std::map<std::string, size_t> status_counts;
   size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;
   std::vector<float> row;
@@ -256,13 +254,11 @@ int run(const Options& options)
 
     const openable::Detection& d = outcome.detection;
     const long match = d.has_candidates ? numbers->stored(map, d.best.session, d.best.position, own) : -1;
-    // Each frame's row, found again by its number when a later frame confirms its loop closure.
-    row_of_frame.resize(outcome.frame + 1, kNoRow);
-    row_of_frame[outcome.frame] =
-        csv.add(csvFrame(query, match, outcome, localisation ? static_cast<uint32_t>(map.sessionCount()) : own));
+    // One row per outcome, and only a frame that came back has a number (one that threw has neither): a
+    // frame's row is its number, where a later frame's confirmation finds it.
+    csv.add(csvFrame(query, match, outcome, localisation ? static_cast<uint32_t>(map.sessionCount()) : own));
     for (const openable::FrameOutcome& earlier : outcome.confirmed)
-      if (earlier.frame < row_of_frame.size() && row_of_frame[earlier.frame] != kNoRow)
-        csv.setStatus(row_of_frame[earlier.frame], openable::FrameStatus::Published);
+      csv.setStatus(earlier.frame, openable::FrameStatus::Published);
     if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;

@@ -74,8 +74,13 @@ private:
   Config config_;
   std::vector<std::string> names_;
   std::map<std::string, uint32_t> indices_;
-  std::map<std::string, LoopDecision> decisions_;  ///< one per query stream: a run never mixes robots
-  std::map<std::string, BasicLoopConfirmation<MergedOutcome>> confirmations_;  ///< likewise
+  /// What decides a query stream's loops: a run never mixes robots.
+  struct StreamDecision
+  {
+    LoopDecision decision;
+    BasicLoopConfirmation<MergedOutcome> confirmation;
+  };
+  std::map<std::string, StreamDecision> streams_;  ///< by query session
 };
 
 }  // namespace openable

@@ -86,13 +86,16 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
         matchUniqueness(d.best.distance, all.size() < 2 ? std::nullopt : std::optional<float>(all[1].distance));
   }
 
-  LoopDecision& decision = decisions_.emplace(out.query_session, LoopDecision(config_)).first->second;
-  out.status = decision.decide(d);
-  out.score = decision.score(d);
-  auto& confirmation =
-      confirmations_.emplace(out.query_session, BasicLoopConfirmation<MergedOutcome>(config_.confirm_frames))
-          .first->second;
-  std::vector<MergedOutcome> confirmed = confirmation.stored(out);
+  auto found = streams_.find(out.query_session);
+  if (found == streams_.end())
+    found = streams_
+                .emplace(out.query_session, StreamDecision{LoopDecision(config_),
+                                                           BasicLoopConfirmation<MergedOutcome>(config_.confirm_frames)})
+                .first;
+  StreamDecision& stream = found->second;
+  out.status = stream.decision.decide(d);
+  out.score = stream.decision.score(d);
+  std::vector<MergedOutcome> confirmed = stream.confirmation.stored(out);
   out.confirmed = std::move(confirmed);
   return out;
 }
