@@ -146,6 +146,10 @@ const std::vector<KeyAccess>& table()
       makeKey("pace_penalty",
               "cost of a change of pace, in standard deviations of a sequence's distance under noise (max_pace > 1)",
               &Config::pace_penalty).range(0, 100).live(),
+      makeKey("slip_penalty",
+              "cost of a sequence moving one place off its line in a frame (a revisit between two of the paces "
+              "followed, or drifting), as a fraction of pace_penalty; 0 = never (max_pace > 1)",
+              &Config::slip_penalty).range(0, 10).live(),
       makeKey("pace_tolerance",
               "places a sequence may be off its line in each frame, for paces between the ones followed (max_pace > 1)",
               &Config::pace_tolerance).range(0, 2).live(),

@@ -185,6 +185,7 @@ void configPaceMatch(benchmark::State& state, const std::string& name, size_t n)
   pace.max_pace = std::max(3, config.max_pace);
   pace.penalty = static_cast<float>(config.pace_penalty);
   pace.tolerance = config.pace_tolerance;
+  pace.slip = static_cast<float>(config.slip_penalty);
   openable::PaceMatcher matcher(db.layout(), config.sequence_length, config.bidirectional, pace);
   std::mt19937_64 rng(99);
   std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));

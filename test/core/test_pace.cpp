@@ -6,12 +6,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <random>
 
-#include "openable/error.h"
 #include "openable/detection/loop_decision.h"
 #include "openable/detection/online_detector.h"
+#include "openable/error.h"
 #include "openable/matching/pace_matcher.h"
 #include "test_util.h"
 
@@ -34,8 +35,8 @@ DescriptorLayout binaryLayout(int bits)
 class NaivePace
 {
 public:
-  NaivePace(const DescriptorLayout& layout, int L, std::vector<std::pair<int, int>> paces, float penalty)
-    : metric_(layout), keep_(1.0f - 1.0f / L), paces_(std::move(paces)), penalty_(penalty)
+  NaivePace(const DescriptorLayout& layout, int L, std::vector<std::pair<int, int>> paces, float penalty, float slip)
+    : metric_(layout), keep_(1.0f - 1.0f / L), paces_(std::move(paces)), penalty_(penalty), slip_(slip)
   {
   }
 
@@ -67,7 +68,16 @@ public:
         const long from = long(j) - (p > 0 ? step : -step);
         // A change of pace costs `penalty_` standard deviations of a path's cost under noise.
         const float change = keep > 0.0f ? penalty_ * spread_ * std::sqrt((1.0f - keep) / (1.0f + keep)) : 0.0f;
-        const float path = std::min(oldCost(from, v), oldBest(from) + change);
+        float path = std::min(oldCost(from, v), oldBest(from) + change);
+        if (slip_ > 0.0f)
+        {
+          // A place off the line: one further along it, or (where it advances) one fewer, for a part of a change.
+          const long further = p > 0 ? -1 : 1;
+          float off = oldCost(from + further, v);
+          if (step != 0)
+            off = std::min(off, oldCost(from - further, v));
+          path = std::min(path, off + slip_ * change);
+        }
         costs[j][v] = (1.0f - keep) * d[j] + keep * path;
         best[j] = std::min(best[j], costs[j][v]);
       }
@@ -98,6 +108,7 @@ private:
   float keep_;
   std::vector<std::pair<int, int>> paces_;
   float penalty_;
+  float slip_;
   std::vector<std::vector<float>> costs_;
   std::vector<float> best_;
   float prior_ = 0.0f;
@@ -114,26 +125,29 @@ TEST(PaceMatcher, StaysWithinItsRoundingOfTheFloatRecurrenceAcrossChunksGrowthAn
 {
   const DescriptorLayout layout = binaryLayout(128);
   for (bool bidirectional : {false, true})
-  {
-    std::mt19937_64 rng(bidirectional ? 11 : 5);
-    PlaceDatabase reference(layout);
-    PaceMatcher matcher(layout, 7, bidirectional, PaceOptions());
-    NaivePace naive(layout, 7, matcher.paces(), 3.0f);
-    for (int t = 0; t < 40; ++t)
+    for (float slip : {0.0f, 0.35f})
     {
-      // The reference grows by 23 places a frame: new places join each row (test_pace_kernels crosses chunks).
-      for (int k = 0; k < 23; ++k)
-        reference.add(openable_test::randomWords(rng, 2), FrameInfo());
-      const auto query = openable_test::randomWords(rng, 2);
-      const size_t candidates = reference.size() - 5;
-      matcher.match(query.data(), reference, candidates);
-      naive.match(query.data(), reference, candidates);
-      ASSERT_EQ(matcher.columns(), candidates);
-      for (size_t j = 0; j < candidates; ++j)
-        ASSERT_NEAR(matcher.normalized(j), std::min(1.0f, naive.best(j)), (3.0f * 7 + 2) / 32767.0f)
-            << "frame " << t << " column " << j << (bidirectional ? " (bidirectional)" : "");
+      std::mt19937_64 rng(bidirectional ? 11 : 5);
+      PlaceDatabase reference(layout);
+      PaceOptions options;
+      options.slip = slip;
+      PaceMatcher matcher(layout, 7, bidirectional, options);
+      NaivePace naive(layout, 7, matcher.paces(), 3.0f, slip);
+      for (int t = 0; t < 40; ++t)
+      {
+        // The reference grows by 23 places a frame: new places join each row (test_pace_kernels crosses chunks).
+        for (int k = 0; k < 23; ++k)
+          reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+        const auto query = openable_test::randomWords(rng, 2);
+        const size_t candidates = reference.size() - 5;
+        matcher.match(query.data(), reference, candidates);
+        naive.match(query.data(), reference, candidates);
+        ASSERT_EQ(matcher.columns(), candidates);
+        for (size_t j = 0; j < candidates; ++j)
+          ASSERT_NEAR(matcher.normalized(j), std::min(1.0f, naive.best(j)), (3.0f * 7 + 2) / 32767.0f)
+              << "frame " << t << " column " << j << (bidirectional ? " (bidirectional)" : "") << " slip " << slip;
+      }
     }
-  }
 }
 
 TEST(PaceMatcher, PacesSpanTheRangeWithOneExactly)
@@ -142,7 +156,10 @@ TEST(PaceMatcher, PacesSpanTheRangeWithOneExactly)
   const auto& paces = matcher.paces();
   ASSERT_GE(paces.size(), 7u);
   const auto has = [&paces](double pace)
-  { return std::any_of(paces.begin(), paces.end(), [pace](auto p) { return std::fabs(double(p.first) / p.second - pace) < 1e-9; }); };
+  {
+    return std::any_of(paces.begin(), paces.end(),
+                       [pace](auto p) { return std::fabs(double(p.first) / p.second - pace) < 1e-9; });
+  };
   EXPECT_TRUE(has(1.0 / 3.0));
   EXPECT_TRUE(has(1.0));
   EXPECT_TRUE(has(3.0));
@@ -187,6 +204,12 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
   bad = PaceOptions();
   bad.tolerance = 3;
   EXPECT_THROW(PaceMatcher(layout, 10, false, bad), Error);
+  for (float slip : {-0.1f, std::nanf(""), std::numeric_limits<float>::infinity()})
+  {
+    bad = PaceOptions();
+    bad.slip = slip;
+    EXPECT_THROW(PaceMatcher(layout, 10, false, bad), Error) << "slip " << slip;
+  }
 }
 
 namespace

@@ -9,8 +9,8 @@
 #include <cstdlib>
 #include <random>
 
-#include "openable/matching/pace_matcher.h"
 #include "bit_oracle.h"  // randomWords
+#include "openable/matching/pace_matcher.h"
 
 using namespace openable;
 
@@ -39,9 +39,13 @@ class NaiveFixedPace
 {
 public:
   NaiveFixedPace(const DescriptorLayout& layout, int L, std::vector<std::pair<int, int>> paces, float penalty,
-                 int tolerance)
-    : metric_(layout), keep_(1.0f - 1.0f / static_cast<float>(L)), paces_(std::move(paces)), penalty_(penalty),
-      tolerance_(tolerance)
+                 int tolerance, float slip)
+    : metric_(layout),
+      keep_(1.0f - 1.0f / static_cast<float>(L)),
+      paces_(std::move(paces)),
+      penalty_(penalty),
+      tolerance_(tolerance),
+      slip_(slip)
   {
   }
 
@@ -73,6 +77,9 @@ public:
     const int32_t a = std::min<int32_t>(32767, static_cast<int32_t>(std::lround(double(keep) * 32768.0)));
     const float scale = static_cast<float>((32768.0 - a) / 32768.0 * kOne / max_distance);
     const int32_t change_fixed = static_cast<int32_t>(std::min<double>(kOne, std::round(double(change) * kOne)));
+    const int32_t slip_fixed =
+        slip_ > 0.0f ? static_cast<int32_t>(std::min<double>(kOne, std::round(double(slip_) * double(change) * kOne)))
+                     : -1;
     const auto entry = [scale](uint32_t r)
     { return static_cast<int32_t>(std::nearbyint(std::min(float(int32_t(r)) * scale, float(kOne)))); };
     const auto oldCost = [&](long j, size_t v)
@@ -88,7 +95,16 @@ public:
         const int p = paces_[v].first, q = paces_[v].second;
         const long step = long((t_ + 1) * std::abs(p) / q) - long(t_ * std::abs(p) / q);
         const long from = long(j) - (p > 0 ? step : -step);
-        const int32_t path = std::min<int32_t>(oldCost(from, v), saturated(oldBest(from) + change_fixed));
+        int32_t path = std::min<int32_t>(oldCost(from, v), saturated(oldBest(from) + change_fixed));
+        if (slip_fixed >= 0)
+        {
+          // One place further along the line (behind forward, ahead reverse) or, where it advances, one fewer.
+          const long further = p > 0 ? -1 : 1;
+          int32_t off = oldCost(from + further, v);
+          if (step != 0)
+            off = std::min<int32_t>(off, oldCost(from - further, v));
+          path = std::min<int32_t>(path, saturated(off + slip_fixed));
+        }
         costs[j][v] = saturated(entry(nearest[j]) + ((path * a + 16384) >> 15));
         smallest = std::min(smallest, costs[j][v]);
       }
@@ -124,6 +140,7 @@ private:
   std::vector<std::pair<int, int>> paces_;
   float penalty_;
   int tolerance_;
+  float slip_;
   std::vector<std::vector<int16_t>> costs_;
   std::vector<int16_t> best_;
   int16_t prior_ = 0;
@@ -131,7 +148,6 @@ private:
   uint64_t t_ = 0;
   uint64_t first_id_ = 0;
 };
-
 
 /// The query: a stored place now and then (so some paths are far better than the rest), noise otherwise.
 std::vector<uint64_t> queryAt(std::mt19937_64& rng, const PlaceDatabase& reference, int t)
@@ -155,38 +171,40 @@ TEST(PaceKernels, EveryKernelEqualsTheFixedPointRecurrence)
     for (bool bidirectional : {false, true})
       for (int tolerance : {0, 1, 2})
         for (size_t capacity : {size_t(0), size_t(3000)})
-        {
-          const std::string what = paceKernelName(kernel) + (bidirectional ? " bidirectional" : " forward") +
-                                   " tolerance " + std::to_string(tolerance) + " capacity " +
-                                   std::to_string(capacity);
-          std::mt19937_64 rng(17 + tolerance);
-          PlaceDatabase reference(layout, capacity);
-          PaceOptions options;
-          options.kernel = kernel;
-          options.tolerance = tolerance;
-          options.max_pace = tolerance == 2 ? 2 : 3;
-          PaceMatcher matcher(layout, 7, bidirectional, options);
-          NaiveFixedPace naive(layout, 7, matcher.paces(), options.penalty, tolerance);
-          for (int t = 0; t < 45; ++t)
+          for (float slip : {0.0f, 0.35f, 3.0f})
           {
-            // 101 places a frame: rows cross the chunks of 2048 columns (twice), new places join every row, and
-            // past 3000 the oldest leave. Five stay out of the row (the exclusion window).
-            for (int k = 0; k < 101; ++k)
-              reference.add(openable_test::randomWords(rng, 2), FrameInfo());
-            const auto query = queryAt(rng, reference, t);
-            const size_t candidates = reference.size() - 5;
-            matcher.match(query.data(), reference, candidates);
-            naive.match(query.data(), reference, candidates);
-            ASSERT_EQ(matcher.columns(), candidates) << what;
-            for (size_t j = 0; j < candidates; ++j)
+            const std::string what = paceKernelName(kernel) + (bidirectional ? " bidirectional" : " forward") +
+                                     " tolerance " + std::to_string(tolerance) + " capacity " +
+                                     std::to_string(capacity) + " slip " + std::to_string(slip);
+            std::mt19937_64 rng(17 + tolerance);
+            PlaceDatabase reference(layout, capacity);
+            PaceOptions options;
+            options.kernel = kernel;
+            options.tolerance = tolerance;
+            options.max_pace = tolerance == 2 ? 2 : 3;
+            options.slip = slip;
+            PaceMatcher matcher(layout, 7, bidirectional, options);
+            NaiveFixedPace naive(layout, 7, matcher.paces(), options.penalty, tolerance, slip);
+            for (int t = 0; t < 45; ++t)
             {
-              ASSERT_EQ(matcher.normalized(j), naive.best(j)) << what << ", frame " << t << ", column " << j;
-              const auto& slope = matcher.paces()[naive.pace(j)];
-              ASSERT_EQ(matcher.pace(j), float(std::abs(slope.first)) / float(slope.second))
-                  << what << ", frame " << t << ", column " << j;
+              // 101 places a frame: rows cross the chunks of 2048 columns (twice), new places join every row, and
+              // past 3000 the oldest leave. Five stay out of the row (the exclusion window).
+              for (int k = 0; k < 101; ++k)
+                reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+              const auto query = queryAt(rng, reference, t);
+              const size_t candidates = reference.size() - 5;
+              matcher.match(query.data(), reference, candidates);
+              naive.match(query.data(), reference, candidates);
+              ASSERT_EQ(matcher.columns(), candidates) << what;
+              for (size_t j = 0; j < candidates; ++j)
+              {
+                ASSERT_EQ(matcher.normalized(j), naive.best(j)) << what << ", frame " << t << ", column " << j;
+                const auto& slope = matcher.paces()[naive.pace(j)];
+                ASSERT_EQ(matcher.pace(j), float(std::abs(slope.first)) / float(slope.second))
+                    << what << ", frame " << t << ", column " << j;
+              }
             }
           }
-        }
 }
 
 TEST(PaceKernels, AKernelTheCpuLacksIsRefused)

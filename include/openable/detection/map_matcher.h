@@ -62,6 +62,7 @@ struct MatchOptions
   int max_pace;               ///< 1: the paper's sequences (SequenceMatcher); more: PaceMatcher
   double pace_penalty;
   int pace_tolerance;
+  double slip_penalty;        ///< a fraction of pace_penalty (PaceMatcher)
   int exclusion_window;       ///< own-session frames too recent to be candidates
   double exclusion_seconds;   ///< the same in seconds of stamp
   int top_k;

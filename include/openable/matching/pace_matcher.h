@@ -17,22 +17,28 @@ namespace openable
 /// reference per query frame, and change pace along the way (an online Viterbi over places and paces, after
 /// Hansen & Browning, ICRA 2014, in min-plus form, with SeqSLAM's straight trajectories as its states).
 ///
-/// Each place j and pace v (17 slopes from 1/3 to 3 for max_pace 3, in steps of 15 %, plus one beyond each end) keeps the
-/// cost of the best path of query frames ending in j at that pace, an exponentially weighted mean of frame
+/// Each place j and pace v (17 slopes from 1/3 to 3 for max_pace 3, in steps of 15 %, plus one beyond each end) keeps
+/// the cost of the best path of query frames ending in j at that pace, an exponentially weighted mean of frame
 /// distances along it with a memory of L frames (a = 1 - 1/L):
-///   C_t[j, v] = (1 - a) * d(t, j) + a * min(C_{t-1}[j - s, v], M_{t-1}[j - s] + pace_penalty),
+///   C_t[j, v] = (1 - a) * d(t, j) + a * min(C_{t-1}[j - s, v], M_{t-1}[j - s] + pace_penalty,
+///                                           C_{t-1}[j - s -+ 1, v] + slip_penalty * pace_penalty),
 ///   M_t[j] = min_v C_t[j, v]
 /// where s = floor((t + 1) v) - floor(t v) is the places that pace advances at frame t (a straight line, as
 /// SeqSLAM searches), d the normalised frame distance (0 = identical, 1 = every bit different), and M_t[j]
 /// the place's cost at its best pace: a path keeps its pace for free and changes it for `pace_penalty`, so a
 /// revisit that speeds up or slows down is followed, while a path cannot zig-zag through the row picking the
-/// smallest distance of every frame (which would make every place look alike). With `bidirectional`, the
-/// reverse (places visited backwards: j + s) is kept the same way. One pass over the descriptors per frame,
-/// whatever L and max_pace are, fused with one pass over the costs, chunk by chunk (the chunk's distances stay
-/// in L1): the costs are 16-bit fixed point (1.0 = 32767, products rounded, sums saturated), 2 bytes a place and
-/// pace, so a frame moves 48 + 17 x 4 bytes a place rather than 48 + 17 x 8, and a vector holds 16 or 32 places.
-/// The rounding moves a cost by at most about 3 L units of 1 / 32767 from the float recurrence (test_pace checks
-/// it); every kernel (portable, AVX2, AVX-512BW, chosen at run time) computes the same integers (test_pace_kernels).
+/// smallest distance of every frame (which would make every place look alike). The third term (with
+/// `slip_penalty` > 0) lets a path move one place off its line in a frame, one further or, where the line
+/// advances, one fewer, for a fraction of a change of pace: a revisit at a pace between two of those followed
+/// (1.25x lies between 1.15x and 1.32x; a straight line at the wrong one drifts a place every few frames), or one
+/// whose pace drifts, stays on its place without paying a whole change of pace at every drift. With
+/// `bidirectional`, the reverse (places visited backwards: j + s) is kept the same way. One pass over the
+/// descriptors per frame, whatever L and max_pace are, fused with one pass over the costs, chunk by chunk (the
+/// chunk's distances stay in L1): the costs are 16-bit fixed point (1.0 = 32767, products rounded, sums
+/// saturated), 2 bytes a place and pace, so a frame moves 48 + 17 x 4 bytes a place rather than 48 + 17 x 8, and a
+/// vector holds 16 or 32 places. The rounding moves a cost by at most about 3 L units of 1 / 32767 from the float
+/// recurrence (test_pace checks it); every kernel (portable, AVX2, AVX-512BW, chosen at run time) computes the
+/// same integers (test_pace_kernels).
 ///
 /// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
 /// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
@@ -78,12 +84,13 @@ struct CacheAligned
 };
 using AlignedCosts = std::vector<int16_t, CacheAligned<int16_t>>;
 
-/// How PaceMatcher follows a revisit (Config's max_pace, pace_penalty, pace_tolerance).
+/// How PaceMatcher follows a revisit (Config's max_pace, pace_penalty, slip_penalty, pace_tolerance).
 struct PaceOptions
 {
-  int max_pace = 3;        ///< paces from 1 / max_pace to max_pace places per frame
-  float penalty = 3.0f;    ///< a change of pace, in standard deviations of a path's cost under noise
-  int tolerance = 1;       ///< places a path may be off its line in each frame (0 .. 2)
+  int max_pace = 3;      ///< paces from 1 / max_pace to max_pace places per frame
+  float penalty = 3.0f;  ///< a change of pace, in standard deviations of a path's cost under noise
+  float slip = 0.0f;     ///< a path one place off its line in a frame, as a fraction of `penalty` (0 = never)
+  int tolerance = 1;     ///< places a path may be off its line in each frame (0 .. 2)
   PaceKernel kernel = PaceKernel::kBest;  ///< tests and benchmarks pick one; Error when the CPU lacks it
 };
 
@@ -155,10 +162,11 @@ private:
   int max_pace_;
   bool bidirectional_;
   float step_penalty_;
+  float slip_penalty_;  ///< fraction of a change of pace; 0 = paths never leave their line
   int tolerance_;
   PaceKernel kernel_;
   std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
-  float keep_ = 0.0f;  ///< a = 1 - 1/L, the weight of the path so far
+  float keep_ = 0.0f;                        ///< a = 1 - 1/L, the weight of the path so far
   uint64_t queries_ = 0;
   uint64_t evidence_ = 0;  ///< query frames that had places to match since the last reset
   uint64_t first_id_ = 0;
@@ -167,18 +175,18 @@ private:
   /// C[j, v]: per chunk of kChunk places, per pace, a segment of pad_ places, the chunk's places and pad_ more
   /// (paces read up to pad_ places beyond the chunk; the padding holds copies of those).
   AlignedCosts costs_;
-  AlignedCosts reverse_;  ///< with bidirectional: reverse paces read one buffer and write the other
-  bool flipped_ = false;          ///< the reverse paces' last costs are in reverse_
-  size_t pad_ = 4;  ///< more places than any pace advances in a frame
-  size_t margin_ = 32;  ///< pad_ rounded up to whole vectors: every segment's places start on a cache line
-  size_t segment_ = 0;  ///< kChunk + 2 margin_
+  AlignedCosts reverse_;           ///< with bidirectional: reverse paces read one buffer and write the other
+  bool flipped_ = false;           ///< the reverse paces' last costs are in reverse_
+  size_t pad_ = 4;                 ///< more places than any pace advances in a frame
+  size_t margin_ = 32;             ///< pad_ rounded up to whole vectors: every segment's places start on a cache line
+  size_t segment_ = 0;             ///< kChunk + 2 margin_
   std::vector<int16_t> best_;      ///< M[j] at pad_ + j: the smallest of a place's costs, judged by its own distance
   std::vector<int16_t> old_best_;  ///< the previous frame's M, while match() runs
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.
-  std::vector<uint32_t> raw_;     ///< frame distances
-  AlignedCosts entry_;    ///< the entry terms of the kernel
+  std::vector<uint32_t> raw_;  ///< frame distances
+  AlignedCosts entry_;         ///< the entry terms of the kernel
   AlignedCosts extra_;
   AlignedCosts smallest_;
   AlignedCosts with_change_;

@@ -23,6 +23,7 @@ MatchOptions MatchOptions::from(const Config& config)
   o.max_pace = config.max_pace;
   o.pace_penalty = config.pace_penalty;
   o.pace_tolerance = config.pace_tolerance;
+  o.slip_penalty = config.slip_penalty;
   o.exclusion_window = config.exclusion_window;
   o.exclusion_seconds = config.exclusion_seconds;
   o.top_k = config.top_k;
@@ -48,6 +49,7 @@ std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layo
   pace.max_pace = options_.max_pace;
   pace.penalty = static_cast<float>(options_.pace_penalty);
   pace.tolerance = options_.pace_tolerance;
+  pace.slip = static_cast<float>(options_.slip_penalty);
   return std::make_unique<PaceMatcher>(layout, options_.sequence_length, options_.bidirectional, pace);
 }
 
@@ -183,7 +185,8 @@ void MapMatcher::setOptions(const MatchOptions& options)
 {
   const bool new_kind = (options.max_pace <= 1) != (options_.max_pace <= 1) || options.max_pace != options_.max_pace ||
                         options.pace_penalty != options_.pace_penalty ||
-                        options.pace_tolerance != options_.pace_tolerance;
+                        options.pace_tolerance != options_.pace_tolerance ||
+                        options.slip_penalty != options_.slip_penalty;
   if (new_kind)
   {
     options_ = options;

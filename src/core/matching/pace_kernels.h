@@ -42,6 +42,10 @@ struct Chunk
   float entry_scale;  ///< the entry term of distance r: nearbyint(float(r) * entry_scale) (the weight 1 - a in it)
   int16_t keep;       ///< a in 1/32768: a product x * a is (x * keep + 2^14) >> 15
   int16_t change;     ///< the cost of a change of pace
+  /// The cost of a path moving one place off its line in a frame (one place further, or one fewer where the line
+  /// advances), so a revisit between two of the paces followed, or drifting from one to the next, is followed
+  /// without a change of pace; -1: never (the slip_penalty 0 of the configuration).
+  int16_t slip;
   const int16_t* old_best;  ///< M of the previous frame, indexed by place; valid from -pad to n + pad
   int16_t* best;            ///< M of this frame, indexed by place
   const PaceRow* rows;
@@ -52,8 +56,8 @@ struct Chunk
   size_t distinct;
   const uint8_t* slot;
   // Scratch of at least m entries each.
-  int16_t* entry;  ///< the entry term of the nearest distance within the tolerance
-  int16_t* extra;  ///< the entry term of the place's own distance minus that one (M is judged by its own)
+  int16_t* entry;        ///< the entry term of the nearest distance within the tolerance
+  int16_t* extra;        ///< the entry term of the place's own distance minus that one (M is judged by its own)
   int16_t* smallest;     ///< the smallest cost of each place
   int16_t* with_change;  ///< M' + change for each offset, `stride` entries each
   size_t stride;
@@ -117,9 +121,20 @@ inline void prepare(const Chunk& c, size_t i, ChunkSums& sums)
   c.extra[i] = static_cast<int16_t>(entryOf(r, c.entry_scale) - c.entry[i]);
 }
 
+/// The best previous cost of a path one place off its line, before the slip's cost: the place one further along
+/// (`from` - 1 forward, + 1 reverse) and, where the line advances (offset != 0), the place one fewer. A forward row
+/// updated in place from its last place down has not overwritten either yet.
+inline int16_t offLine(const PaceRow& row, long from)
+{
+  const long further = row.from == row.to ? -1 : 1;
+  const int16_t one_more = row.from[from + further];
+  return row.offset != 0 ? std::min(one_more, row.from[from - further]) : one_more;
+}
+
 /// Every pace's cost and M of place i of the chunk:
-///   C[j, v] = entry + a * min(C'[j + offset_v, v], M'[j + offset_v] + change),  M[j] = min_v C[j, v] + extra
-/// (primes: the previous frame). The vector kernels' tails.
+///   C[j, v] = entry + a * min(C'[j + offset_v, v], M'[j + offset_v] + change, C'[j + offset_v -+ 1, v] + slip),
+///   M[j] = min_v C[j, v] + extra
+/// (primes: the previous frame; the slip term as offLine, when slip >= 0). The vector kernels' tails.
 inline void update(const Chunk& c, size_t i, ChunkSums& sums)
 {
   const size_t j = c.begin + i;
@@ -128,7 +143,9 @@ inline void update(const Chunk& c, size_t i, ChunkSums& sums)
   {
     const PaceRow& row = c.rows[v];
     const long from = static_cast<long>(i) + row.offset;
-    const int16_t path = std::min(row.from[from], addSaturated(c.old_best[static_cast<long>(j) + row.offset], c.change));
+    int16_t path = std::min(row.from[from], addSaturated(c.old_best[static_cast<long>(j) + row.offset], c.change));
+    if (c.slip >= 0)
+      path = std::min(path, addSaturated(offLine(row, from), c.slip));
     const int16_t cost = addSaturated(c.entry[i], scaled(path, c.keep));
     row.to[i] = cost;
     best = std::min(best, cost);

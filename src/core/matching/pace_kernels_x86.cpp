@@ -44,44 +44,100 @@ __attribute__((target("avx512f,avx512bw"))) inline __m256i entries512(__m512i r,
 }
 
 /// One pace's costs for the 32 places from i (fewer under a mask) from the previous costs of the places it comes
-/// from, and the smallest cost of each place so far.
-template <bool kMasked>
-__attribute__((target("avx512f,avx512bw"))) inline void pace512(__m512i old, int16_t* to, const int16_t* with_change,
-                                                                const int16_t* entry, int16_t* best, size_t i,
-                                                                __mmask32 mask, __m512i keep)
+/// from (`old`), of the places one off its line (`off`, used when kSlip), and the smallest cost of each place so far.
+template <bool kMasked, bool kSlip>
+__attribute__((target("avx512f,avx512bw"))) inline void pace512(__m512i old, __m512i off, int16_t* to,
+                                                                const int16_t* with_change, const int16_t* entry,
+                                                                int16_t* best, size_t i, __mmask32 mask, __m512i keep,
+                                                                __m512i slip)
 {
-  const __m512i path = _mm512_min_epi16(old, load512<kMasked>(mask, with_change + i));
+  __m512i path = _mm512_min_epi16(old, load512<kMasked>(mask, with_change + i));
+  if (kSlip)
+    path = _mm512_min_epi16(path, _mm512_adds_epi16(off, slip));
   const __m512i cost = _mm512_adds_epi16(load512<kMasked>(mask, entry + i), _mm512_mulhrs_epi16(path, keep));
   store512<kMasked>(mask, to + i, cost);
   store512<kMasked>(mask, best + i, _mm512_min_epi16(load512<kMasked>(mask, best + i), cost));
 }
 
+/// The index vector that picks (before, now)[32 + k - behind] for lane k: indices 0..31 pick `before`, 32..63 `now`.
+__attribute__((target("avx512f,avx512bw"))) inline __m512i behindIndex(long behind)
+{
+  return _mm512_add_epi16(_mm512_set_epi16(31, 30, 29, 28, 27, 26, 25, 24, 23, 22, 21, 20, 19, 18, 17, 16, 15, 14, 13,
+                                           12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
+                          _mm512_set1_epi16(static_cast<int16_t>(32 - behind)));
+}
+
+/// The previous costs one place off a forward line, from the permutations of the block before and this one: one
+/// place further along (`further`) and, where the line advances (`fewer_too`), one fewer. Unused without kSlip.
+template <bool kSlip>
+__attribute__((target("avx512f,avx512bw"))) inline __m512i offLine512(__m512i before, __m512i now, __m512i further,
+                                                                      __m512i fewer, bool fewer_too)
+{
+  if (!kSlip)
+    return before;
+  const __m512i more = _mm512_permutex2var_epi16(before, further, now);
+  return fewer_too ? _mm512_min_epi16(more, _mm512_permutex2var_epi16(before, fewer, now)) : more;
+}
+
+/// The same for a reverse line, read from the other buffer: one place further ahead and, where the line advances,
+/// one fewer.
+template <bool kSlip>
+__attribute__((target("avx512f,avx512bw"))) inline __m512i offLineReverse512(const int16_t* from, __mmask32 mask,
+                                                                             size_t i, bool fewer_too)
+{
+  if (!kSlip)
+    return _mm512_setzero_si512();
+  const __m512i more = _mm512_maskz_loadu_epi16(mask, from + i + 1);
+  return fewer_too ? _mm512_min_epi16(more, _mm512_maskz_loadu_epi16(mask, from + i - 1)) : more;
+}
+
 /// A forward pace over the chunk, updated in place in the order of memory: each block's previous costs are kept
-/// in a register before they are overwritten, and the places `step` behind are a permutation of that block and
-/// the next (the first block's come from the segment's padding).
+/// in a register before they are overwritten, and the places `step` behind (and, with kSlip, step + 1 and step - 1
+/// behind) are permutations of that block and the next (the first block's come from the segment's padding).
+template <bool kSlip>
 __attribute__((target("avx512f,avx512bw"))) inline void forward512(int16_t* row, long step, const int16_t* with_change,
                                                                    const int16_t* entry, int16_t* best, size_t whole,
-                                                                   __mmask32 top, __m512i keep)
+                                                                   __mmask32 top, __m512i keep, __m512i slip)
 {
-  // shifted[k] = (before, now)[32 + k - step]: indices 0..31 pick `before`, 32..63 `now`.
-  const __m512i index = _mm512_add_epi16(
-      _mm512_set_epi16(31, 30, 29, 28, 27, 26, 25, 24, 23, 22, 21, 20, 19, 18, 17, 16, 15, 14, 13, 12, 11, 10, 9, 8, 7,
-                       6, 5, 4, 3, 2, 1, 0),
-      _mm512_set1_epi16(static_cast<int16_t>(32 - step)));
-  // Only the last `step` lanes of the block before the chunk are used: the padding, nothing before it is read.
-  const __mmask32 padding = step > 0 ? __mmask32(~0u << (32 - step)) : __mmask32(0);
+  const __m512i index = behindIndex(step), further = behindIndex(step + 1),
+                fewer = behindIndex(step > 0 ? step - 1 : 0);
+  // Only the last places of the block before the chunk are used: the padding, nothing before it is read.
+  const long used = kSlip ? step + 1 : step;
+  const __mmask32 padding = used > 0 ? __mmask32(~0u << (32 - used)) : __mmask32(0);
   __m512i before = _mm512_maskz_loadu_epi16(padding, row - 32);
   for (size_t i = 0; i < whole; i += 32)
   {
     const __m512i now = _mm512_loadu_si512(row + i);
-    pace512<false>(_mm512_permutex2var_epi16(before, index, now), row, with_change, entry, best, i, ~__mmask32(0), keep);
+    pace512<false, kSlip>(_mm512_permutex2var_epi16(before, index, now),
+                          offLine512<kSlip>(before, now, further, fewer, step > 0), row, with_change, entry, best, i,
+                          ~__mmask32(0), keep, slip);
     before = now;
   }
   if (top)
   {
     const __m512i now = _mm512_maskz_loadu_epi16(top, row + whole);
-    pace512<true>(_mm512_permutex2var_epi16(before, index, now), row, with_change, entry, best, whole, top, keep);
+    pace512<true, kSlip>(_mm512_permutex2var_epi16(before, index, now),
+                         offLine512<kSlip>(before, now, further, fewer, step > 0), row, with_change, entry, best, whole,
+                         top, keep, slip);
   }
+}
+
+/// A reverse pace over the chunk: the previous costs are in another buffer, read at or ahead of the place (and one
+/// place either side of that, with kSlip: one further, and one fewer where the line advances).
+template <bool kSlip>
+__attribute__((target("avx512f,avx512bw"))) inline void reverse512(const PaceRow& row, const int16_t* with_change,
+                                                                   const int16_t* entry, int16_t* best, size_t whole,
+                                                                   __mmask32 top, __m512i keep, __m512i slip)
+{
+  const int16_t* from = row.from + row.offset;
+  for (size_t i = 0; i < whole; i += 32)
+    pace512<false, kSlip>(_mm512_loadu_si512(from + i),
+                          offLineReverse512<kSlip>(from, ~__mmask32(0), i, row.offset != 0), row.to, with_change, entry,
+                          best, i, ~__mmask32(0), keep, slip);
+  if (top)
+    pace512<true, kSlip>(_mm512_maskz_loadu_epi16(top, from + whole),
+                         offLineReverse512<kSlip>(from, top, whole, row.offset != 0), row.to, with_change, entry, best,
+                         whole, top, keep, slip);
 }
 
 // ---------------------------------------------------------------------------------------------- AVX2
@@ -98,10 +154,21 @@ __attribute__((target("avx2"))) inline __m256i load256(const int16_t* p)
   return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
 }
 
+/// One pace's costs for the 16 places from i; with kSlip, also from the places one off its line: `further` (-1
+/// forward, +1 reverse) and, when `fewer`, the other side.
+template <bool kSlip>
 __attribute__((target("avx2"))) inline void pace256(const int16_t* from, int16_t* to, const int16_t* with_change,
-                                                     const int16_t* entry, int16_t* best, size_t i, __m256i keep)
+                                                    const int16_t* entry, int16_t* best, size_t i, __m256i keep,
+                                                    long further, bool fewer, __m256i slip)
 {
-  const __m256i path = _mm256_min_epi16(load256(from + i), load256(with_change + i));
+  __m256i path = _mm256_min_epi16(load256(from + i), load256(with_change + i));
+  if (kSlip)
+  {
+    __m256i off = load256(from + i + further);
+    if (fewer)
+      off = _mm256_min_epi16(off, load256(from + i - further));
+    path = _mm256_min_epi16(path, _mm256_adds_epi16(off, slip));
+  }
   const __m256i cost = _mm256_adds_epi16(load256(entry + i), _mm256_mulhrs_epi16(path, keep));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(to + i), cost);
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + i), _mm256_min_epi16(load256(best + i), cost));
@@ -153,28 +220,31 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
   int16_t* best = c.smallest;
   for (size_t i = 0; i < m; i += 32)
     _mm512_storeu_si512(best + i, highest);
+  const bool slips = c.slip >= 0;
+  const __m512i slip = _mm512_set1_epi16(slips ? c.slip : 0);
   for (size_t v = 0; v < c.paces; ++v)
   {
     const PaceRow& row = c.rows[v];
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
     if (row.from == row.to)
     {
-      forward512(row.to, -row.offset, with_change, c.entry, best, whole, top, keep);
-      continue;
+      if (slips)
+        forward512<true>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip);
+      else
+        forward512<false>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip);
     }
-    // Reverse: the previous costs are in another buffer, read at or ahead of the place.
-    const int16_t* from = row.from + row.offset;
-    for (size_t i = 0; i < whole; i += 32)
-      pace512<false>(_mm512_loadu_si512(from + i), row.to, with_change, c.entry, best, i, ~__mmask32(0), keep);
-    if (top)
-      pace512<true>(_mm512_maskz_loadu_epi16(top, from + whole), row.to, with_change, c.entry, best, whole, top, keep);
+    else if (slips)
+      reverse512<true>(row, with_change, c.entry, best, whole, top, keep, slip);
+    else
+      reverse512<false>(row, with_change, c.entry, best, whole, top, keep, slip);
   }
   __m512i minimum = highest;
   int16_t* out = c.best + c.begin;
   for (size_t i = 0; i < m; i += 32)
   {
     const __mmask32 mask = i < whole ? ~__mmask32(0) : top;
-    const __m512i value = _mm512_adds_epi16(_mm512_maskz_loadu_epi16(mask, best + i), _mm512_maskz_loadu_epi16(mask, c.extra + i));
+    const __m512i value =
+        _mm512_adds_epi16(_mm512_maskz_loadu_epi16(mask, best + i), _mm512_maskz_loadu_epi16(mask, c.extra + i));
     _mm512_mask_storeu_epi16(out + i, mask, value);
     minimum = _mm512_min_epi16(minimum, _mm512_mask_blend_epi16(mask, highest, value));
   }
@@ -196,9 +266,9 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
     const __m256i r = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i));
     __m256i nearest = r;
     for (long k = 1; k <= c.tolerance; ++k)
-      nearest = _mm256_min_epu32(
-          nearest, _mm256_min_epu32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i - k)),
-                                    _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i + k))));
+      nearest = _mm256_min_epu32(nearest,
+                                 _mm256_min_epu32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i - k)),
+                                                  _mm256_loadu_si256(reinterpret_cast<const __m256i*>(own + i + k))));
     const __m128i entry = entries256(nearest, scale);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(c.entry + i), entry);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(c.extra + i), _mm_sub_epi16(entries256(r, scale), entry));
@@ -225,21 +295,30 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
     const int16_t* old_best = c.old_best + static_cast<long>(c.begin) + c.offsets[u];
     int16_t* with_change = c.with_change + u * c.stride;
     for (size_t k = 0; k < whole; k += 16)
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(with_change + k),
-                          _mm256_adds_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(old_best + k)), change));
+      _mm256_storeu_si256(
+          reinterpret_cast<__m256i*>(with_change + k),
+          _mm256_adds_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(old_best + k)), change));
   }
   int16_t* best = c.smallest;
   for (size_t k = 0; k < whole; k += 16)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + k), highest);
+  const __m256i slip = _mm256_set1_epi16(c.slip >= 0 ? c.slip : 0);
   for (size_t v = 0; v < c.paces; ++v)
   {
     const int16_t* from = c.rows[v].from + c.rows[v].offset;
     int16_t* to = c.rows[v].to;
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
+    // Forward rows go down from the chunk's top, so the places one off the line (at most the block itself) are
+    // still the previous frame's.
+    const long further = c.rows[v].from == c.rows[v].to ? -1 : 1;
+    const bool fewer = c.rows[v].offset != 0;
     for (size_t k = whole; k > 0;)
     {
       k -= 16;
-      pace256(from, to, with_change, c.entry, best, k, keep);
+      if (c.slip >= 0)
+        pace256<true>(from, to, with_change, c.entry, best, k, keep, further, fewer, slip);
+      else
+        pace256<false>(from, to, with_change, c.entry, best, k, keep, further, fewer, slip);
     }
   }
   __m256i minimum = highest;

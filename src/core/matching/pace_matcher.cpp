@@ -16,6 +16,9 @@ namespace
 /// of 17 x 4 KB (256 columns: a frame at 1e7 places took 73 ms, 1024: 54, 2048: 55, 4096: 54, while 1e5 places
 /// slowed down past 2048), and each chunk gets one minimum for smallestDistinct().
 constexpr size_t kChunk = 2048;
+/// The fastest pace the AVX-512 kernel follows: it reads a place up to max_pace + 1 places behind (a slip) from a
+/// vector of 32 and the one before.
+constexpr int kWidestAvx512Pace = 31;
 /// The cost of a path that does not exist (before the first place): never the minimum, never overflows.
 constexpr float kNoPath = 1e30f;
 
@@ -59,6 +62,7 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     max_pace_(options.max_pace),
     bidirectional_(bidirectional),
     step_penalty_(options.penalty),
+    slip_penalty_(options.slip),
     tolerance_(options.tolerance),
     kernel_(options.kernel)
 {
@@ -66,6 +70,11 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     throw Error("max_pace " + std::to_string(max_pace_) + " is out of range; expected 1..64 places per frame");
   if (!std::isfinite(step_penalty_) || step_penalty_ < 0.0f)
     throw Error("pace_penalty must be finite and >= 0");
+  if (!std::isfinite(slip_penalty_) || slip_penalty_ < 0.0f)
+    throw Error("slip_penalty must be finite and >= 0 (a fraction of pace_penalty; 0 = off)");
+  if (kernel_ == PaceKernel::kAvx512 && max_pace_ > kWidestAvx512Pace)
+    throw Error("the avx512bw pace kernel follows paces up to " + std::to_string(kWidestAvx512Pace) +
+                " places per frame; max_pace is " + std::to_string(max_pace_));
   if (tolerance_ < 0 || tolerance_ > 2)
     throw Error("pace_tolerance " + std::to_string(tolerance_) + " is out of range; expected 0..2 places");
   pace_kernels::kernelFor(kernel_);  // throws now rather than at the first frame
@@ -169,8 +178,7 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
     if (row.size() < 2 * pad_)
       row.assign(2 * pad_, prior_);
     const size_t kept = std::min(size, columns_ - std::min(front, columns_));
-    row.erase(row.begin() + static_cast<long>(pad_),
-              row.begin() + static_cast<long>(pad_ + std::min(front, columns_)));
+    row.erase(row.begin() + static_cast<long>(pad_), row.begin() + static_cast<long>(pad_ + std::min(front, columns_)));
     row.resize(pad_ + kept);
     row.resize(pad_ + size + pad_, prior_);
     std::fill(row.begin(), row.begin() + static_cast<long>(pad_), prior_);
@@ -208,7 +216,8 @@ void PaceMatcher::distances(const uint64_t* query, const PlaceDatabase& referenc
   const uint32_t far = static_cast<uint32_t>(std::numeric_limits<int32_t>::max());
   const size_t first = tolerance - (begin - low);
   std::fill(raw_.begin(), raw_.begin() + static_cast<long>(first), far);
-  std::fill(raw_.begin() + static_cast<long>(first + (high - low)), raw_.begin() + static_cast<long>(m + 2 * tolerance), far);
+  std::fill(raw_.begin() + static_cast<long>(first + (high - low)), raw_.begin() + static_cast<long>(m + 2 * tolerance),
+            far);
   metric_.row(query, reference.descriptor(low), high - low, raw_.data() + first);
 }
 
@@ -238,10 +247,15 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   const int32_t keep_fixed = std::min<int32_t>(32767, static_cast<int32_t>(std::lround(double(keep) * 32768.0)));
   const double max_distance = static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
   chunk.keep = static_cast<int16_t>(keep_fixed);
-  chunk.entry_scale =
-      static_cast<float>((32768.0 - keep_fixed) / 32768.0 * pace_kernels::kOne / max_distance);
-  chunk.change = static_cast<int16_t>(
-      std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
+  chunk.entry_scale = static_cast<float>((32768.0 - keep_fixed) / 32768.0 * pace_kernels::kOne / max_distance);
+  chunk.change =
+      static_cast<int16_t>(std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
+  // A slip costs a fraction of a change of pace (-1: paths never leave their line; the kernels skip the term).
+  chunk.slip =
+      slip_penalty_ > 0.0f
+          ? static_cast<int16_t>(std::min<double>(
+                pace_kernels::kOne, std::round(double(slip_penalty_) * double(change_cost) * pace_kernels::kOne)))
+          : int16_t(-1);
   chunk.tolerance = tolerance_;
   chunk.raw = raw_.data();
   chunk.entry = entry_.data();
@@ -276,7 +290,9 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   best_.resize(old_best_.size());
   chunk.old_best = old_best_.data() + pad_;
   chunk.best = best_.data() + pad_;
-  const pace_kernels::ChunkFn kernel = pace_kernels::kernelFor(kernel_);
+  // The AVX-512 kernel reads the places behind a block from it and the block before: at most 31 places.
+  const pace_kernels::ChunkFn kernel = pace_kernels::kernelFor(
+      kernel_ == PaceKernel::kBest && max_pace_ > kWidestAvx512Pace ? PaceKernel::kPortable : kernel_);
   uint64_t distance_sum = 0, square_sum = 0;
   // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
   for (size_t k = 0; k < chunks; ++k)
