@@ -10,7 +10,7 @@ out=/tmp/openable_pace_results
 usage=2,7p
 # shellcheck source=scripts/pace_tables_common.sh
 source "$(dirname "${BASH_SOURCE[0]}")/pace_tables_common.sh"
-profiles=(1x 2x 3x 0.5x 0.33x stops:25 stops:100 stops:200 varying:100 ramp:0.5,2 random:1)
+profiles=(1x 2x 3x 0.5x 0.33x stops:25 stops:100 stops:200 varying:100 ramp:0.5,2 random:1 1.25x 1.8x 2.5x)
 args=()
 for p in "${profiles[@]}"; do args+=(--profile "$p"); done
 

@@ -7,7 +7,10 @@
 //                                     as LoopDetector makes it: the scan of the history every frame pays
 //   BM_ConfigPaceMatch/<config>/<N>   the same frame with sequences at any pace (PaceMatcher, the config's max_pace,
 //                                     pace_penalty and pace_tolerance; max_pace 3 when the config says 1), the
-//                                     matcher the shipped configurations run
+//                                     matcher the shipped configurations run (with their slip_penalty)
+//   BM_ConfigPaceMatchNoSlip/<config>/<N>
+//                                     BM_ConfigPaceMatch with slip_penalty 0: what following a path one place off
+//                                     its line costs a frame
 //   BM_ConfigMemoryRead/<config>/<N>  reading those N descriptors once (a sum over every word)
 //   BM_ConfigMatchLength/gardens_point/10000000/<L>
 //                                     BM_ConfigMatch with another sequence length: a frame reads each descriptor
@@ -177,7 +180,7 @@ void configMatch(benchmark::State& state, const std::string& name, size_t n, int
   setBytes(state, db);
 }
 
-void configPaceMatch(benchmark::State& state, const std::string& name, size_t n)
+void configPaceMatch(benchmark::State& state, const std::string& name, size_t n, bool slip)
 {
   const openable::Config config = shipped(name);
   const openable::PlaceDatabase& db = database(name, n);
@@ -185,7 +188,7 @@ void configPaceMatch(benchmark::State& state, const std::string& name, size_t n)
   pace.max_pace = std::max(3, config.max_pace);
   pace.penalty = static_cast<float>(config.pace_penalty);
   pace.tolerance = config.pace_tolerance;
-  pace.slip = static_cast<float>(config.slip_penalty);
+  pace.slip = slip ? static_cast<float>(config.slip_penalty) : 0.0f;
   openable::PaceMatcher matcher(db.layout(), config.sequence_length, config.bidirectional, pace);
   std::mt19937_64 rng(99);
   std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));
@@ -239,7 +242,9 @@ void registerConfigBenchmarks()
       const std::string suffix = name + "/" + std::to_string(n);
       benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n, 0)
           ->Unit(benchmark::kMillisecond);
-      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n)
+      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n, true)
+          ->Unit(benchmark::kMillisecond);
+      benchmark::RegisterBenchmark(("BM_ConfigPaceMatchNoSlip/" + suffix).c_str(), configPaceMatch, name, n, false)
           ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
           ->Unit(benchmark::kMillisecond);
