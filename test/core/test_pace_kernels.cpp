@@ -219,3 +219,42 @@ TEST(PaceKernels, AKernelTheCpuLacksIsRefused)
       EXPECT_THROW(PaceMatcher(binaryLayout(128), 7, false, options), std::exception) << paceKernelName(kernel);
     }
 }
+
+// The AVX-512 kernel reads the places behind a block from it and the block before (31 at most): a faster
+// max_pace runs another kernel with the same integers, and asking for AVX-512 there is refused.
+TEST(PaceKernels, PacesBeyondTheAvx512ReachRunAnotherKernelWithTheSameResults)
+{
+  const DescriptorLayout layout = binaryLayout(128);
+  for (int max_pace : {31, 40})  // 31: the widest AVX-512 reach (a slip reads 32 places behind); 40: beyond it
+  {
+    PaceOptions fastest;
+    fastest.max_pace = max_pace;
+    fastest.slip = 0.35f;
+    PaceOptions portable = fastest;
+    portable.kernel = PaceKernel::kPortable;
+    PaceMatcher best(layout, 7, false, fastest), plain(layout, 7, false, portable);
+    std::mt19937_64 rng(3);
+    PlaceDatabase reference(layout);
+    for (int t = 0; t < 20; ++t)
+    {
+      for (int k = 0; k < 150; ++k)
+        reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+      const auto query = queryAt(rng, reference, t);
+      best.match(query.data(), reference, reference.size());
+      plain.match(query.data(), reference, reference.size());
+      for (size_t j = 0; j < reference.size(); ++j)
+        ASSERT_EQ(best.normalized(j), plain.normalized(j))
+            << "max_pace " << max_pace << ", frame " << t << ", column " << j;
+    }
+  }
+  const auto supported = supportedPaceKernels();
+  if (std::find(supported.begin(), supported.end(), PaceKernel::kAvx512) != supported.end())
+  {
+    PaceOptions wide;
+    wide.kernel = PaceKernel::kAvx512;
+    wide.max_pace = 32;
+    EXPECT_THROW(PaceMatcher(layout, 7, false, wide), std::exception);
+    wide.max_pace = 31;
+    EXPECT_NO_THROW(PaceMatcher(layout, 7, false, wide));
+  }
+}
