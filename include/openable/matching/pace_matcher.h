@@ -13,6 +13,12 @@
 
 namespace openable
 {
+namespace pace_kernels  // the per-frame kernels, private to the core library (src/core/matching/pace_kernels.h)
+{
+struct Chunk;
+struct ChunkSums;
+}  // namespace pace_kernels
+
 /// Sequence matching at any pace: the revisit may advance from 1 / max_pace to max_pace places of the
 /// reference per query frame, and change pace along the way (an online Viterbi over places and paces, after
 /// Hansen & Browning, ICRA 2014, in min-plus form, with SeqSLAM's straight trajectories as its states).
@@ -164,7 +170,7 @@ private:
   float step_penalty_;
   float slip_penalty_;  ///< fraction of a change of pace; 0 = paths never leave their line
   int tolerance_;
-  PaceKernel kernel_;
+  pace_kernels::ChunkSums (*kernel_)(const pace_kernels::Chunk&);  ///< chosen once: the CPU and max_pace decide
   std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
   float keep_ = 0.0f;                        ///< a = 1 - 1/L, the weight of the path so far
   uint64_t queries_ = 0;

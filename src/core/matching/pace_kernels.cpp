@@ -42,10 +42,10 @@ bool supported(PaceKernel kernel)
   }
 }
 
-ChunkFn fastest()
+ChunkFn fastest(long reach)
 {
 #if defined(__x86_64__) || defined(__i386__)
-  if (supported(PaceKernel::kAvx512))
+  if (supported(PaceKernel::kAvx512) && reach <= kAvx512Reach)
     return chunkAvx512;
   if (supported(PaceKernel::kAvx2))
     return chunkAvx2;
@@ -54,10 +54,13 @@ ChunkFn fastest()
 }
 }  // namespace
 
-ChunkFn kernelFor(PaceKernel kernel)
+ChunkFn kernelFor(PaceKernel kernel, long reach)
 {
   if (!supported(kernel))
     throw Error("pace kernel " + paceKernelName(kernel) + " is not supported by this CPU");
+  if (kernel == PaceKernel::kAvx512 && reach > kAvx512Reach)
+    throw Error("the avx512bw pace kernel reads up to " + std::to_string(kAvx512Reach) + " places behind; max_pace " +
+                std::to_string(reach - 1) + " needs " + std::to_string(reach));
   switch (kernel)
   {
 #if defined(__x86_64__) || defined(__i386__)
@@ -69,7 +72,7 @@ ChunkFn kernelFor(PaceKernel kernel)
     case PaceKernel::kPortable:
       return chunkPortable;
     default:
-      return fastest();
+      return fastest(reach);
   }
 }
 }  // namespace pace_kernels

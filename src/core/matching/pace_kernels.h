@@ -84,8 +84,13 @@ ChunkSums chunkAvx2(const Chunk& chunk);    // pace_kernels_x86.cpp
 ChunkSums chunkAvx512(const Chunk& chunk);  // pace_kernels_x86.cpp
 #endif
 
-/// The kernel for `kernel` (kBest: the fastest this CPU runs); throws Error when the CPU cannot run it.
-ChunkFn kernelFor(PaceKernel kernel);
+/// Places behind a block of 32 the AVX-512 kernel can read (from it and the block before): a pace's step, plus one
+/// for a slip.
+constexpr long kAvx512Reach = 32;
+
+/// The kernel for `kernel` whose rows read up to `reach` places behind (max_pace + 1): kBest is the fastest this
+/// CPU runs that reaches that far. Throws Error when the CPU cannot run `kernel` or it does not reach.
+ChunkFn kernelFor(PaceKernel kernel, long reach);
 
 /// Saturating 16-bit arithmetic of the kernels, written once for the portable kernel and the tests' reference.
 inline int16_t addSaturated(int32_t a, int32_t b)

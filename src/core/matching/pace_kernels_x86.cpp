@@ -140,6 +140,23 @@ __attribute__((target("avx512f,avx512bw"))) inline void reverse512(const PaceRow
                          whole, top, keep, slip);
 }
 
+/// Every pace of the chunk, forward in place or reverse from the other buffer (kSlip: with the slip term).
+template <bool kSlip>
+__attribute__((target("avx512f,avx512bw"))) inline void paces512(const Chunk& c, int16_t* best, size_t whole,
+                                                                 __mmask32 top, __m512i keep)
+{
+  const __m512i slip = _mm512_set1_epi16(kSlip ? c.slip : 0);
+  for (size_t v = 0; v < c.paces; ++v)
+  {
+    const PaceRow& row = c.rows[v];
+    const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
+    if (row.from == row.to)
+      forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip);
+    else
+      reverse512<kSlip>(row, with_change, c.entry, best, whole, top, keep, slip);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------- AVX2
 /// Entry terms of 8 places, as entries512.
 __attribute__((target("avx2"))) inline __m128i entries256(__m256i r, __m256 scale)
@@ -172,6 +189,27 @@ __attribute__((target("avx2"))) inline void pace256(const int16_t* from, int16_t
   const __m256i cost = _mm256_adds_epi16(load256(entry + i), _mm256_mulhrs_epi16(path, keep));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(to + i), cost);
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + i), _mm256_min_epi16(load256(best + i), cost));
+}
+
+/// Every pace over the chunk's whole blocks of 16, from the top block down (kSlip: with the slip term). Forward rows
+/// are updated in place, so the places one off the line (at most the block itself) are still the previous frame's.
+template <bool kSlip>
+__attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* best, size_t whole, __m256i keep)
+{
+  const __m256i slip = _mm256_set1_epi16(kSlip ? c.slip : 0);
+  for (size_t v = 0; v < c.paces; ++v)
+  {
+    const PaceRow& row = c.rows[v];
+    const int16_t* from = row.from + row.offset;
+    const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
+    const long further = row.from == row.to ? -1 : 1;
+    const bool fewer = row.offset != 0;
+    for (size_t k = whole; k > 0;)
+    {
+      k -= 16;
+      pace256<kSlip>(from, row.to, with_change, c.entry, best, k, keep, further, fewer, slip);
+    }
+  }
 }
 }  // namespace
 
@@ -220,24 +258,10 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
   int16_t* best = c.smallest;
   for (size_t i = 0; i < m; i += 32)
     _mm512_storeu_si512(best + i, highest);
-  const bool slips = c.slip >= 0;
-  const __m512i slip = _mm512_set1_epi16(slips ? c.slip : 0);
-  for (size_t v = 0; v < c.paces; ++v)
-  {
-    const PaceRow& row = c.rows[v];
-    const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
-    if (row.from == row.to)
-    {
-      if (slips)
-        forward512<true>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip);
-      else
-        forward512<false>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip);
-    }
-    else if (slips)
-      reverse512<true>(row, with_change, c.entry, best, whole, top, keep, slip);
-    else
-      reverse512<false>(row, with_change, c.entry, best, whole, top, keep, slip);
-  }
+  if (c.slip >= 0)
+    paces512<true>(c, best, whole, top, keep);
+  else
+    paces512<false>(c, best, whole, top, keep);
   __m512i minimum = highest;
   int16_t* out = c.best + c.begin;
   for (size_t i = 0; i < m; i += 32)
@@ -302,25 +326,10 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
   int16_t* best = c.smallest;
   for (size_t k = 0; k < whole; k += 16)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + k), highest);
-  const __m256i slip = _mm256_set1_epi16(c.slip >= 0 ? c.slip : 0);
-  for (size_t v = 0; v < c.paces; ++v)
-  {
-    const int16_t* from = c.rows[v].from + c.rows[v].offset;
-    int16_t* to = c.rows[v].to;
-    const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
-    // Forward rows go down from the chunk's top, so the places one off the line (at most the block itself) are
-    // still the previous frame's.
-    const long further = c.rows[v].from == c.rows[v].to ? -1 : 1;
-    const bool fewer = c.rows[v].offset != 0;
-    for (size_t k = whole; k > 0;)
-    {
-      k -= 16;
-      if (c.slip >= 0)
-        pace256<true>(from, to, with_change, c.entry, best, k, keep, further, fewer, slip);
-      else
-        pace256<false>(from, to, with_change, c.entry, best, k, keep, further, fewer, slip);
-    }
-  }
+  if (c.slip >= 0)
+    paces256<true>(c, best, whole, keep);
+  else
+    paces256<false>(c, best, whole, keep);
   __m256i minimum = highest;
   int16_t* out = c.best + c.begin;
   for (size_t k = 0; k < whole; k += 16)

@@ -16,9 +16,6 @@ namespace
 /// of 17 x 4 KB (256 columns: a frame at 1e7 places took 73 ms, 1024: 54, 2048: 55, 4096: 54, while 1e5 places
 /// slowed down past 2048), and each chunk gets one minimum for smallestDistinct().
 constexpr size_t kChunk = 2048;
-/// The fastest pace the AVX-512 kernel follows: it reads a place up to max_pace + 1 places behind (a slip) from a
-/// vector of 32 and the one before.
-constexpr int kWidestAvx512Pace = 31;
 /// The cost of a path that does not exist (before the first place): never the minimum, never overflows.
 constexpr float kNoPath = 1e30f;
 
@@ -64,7 +61,7 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     step_penalty_(options.penalty),
     slip_penalty_(options.slip),
     tolerance_(options.tolerance),
-    kernel_(options.kernel)
+    kernel_(pace_kernels::kernelFor(options.kernel, long(options.max_pace) + 1))  // throws now, not at a frame
 {
   if (max_pace_ < 1 || max_pace_ > 64)
     throw Error("max_pace " + std::to_string(max_pace_) + " is out of range; expected 1..64 places per frame");
@@ -72,12 +69,8 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     throw Error("pace_penalty must be finite and >= 0");
   if (!std::isfinite(slip_penalty_) || slip_penalty_ < 0.0f)
     throw Error("slip_penalty must be finite and >= 0 (a fraction of pace_penalty; 0 = off)");
-  if (kernel_ == PaceKernel::kAvx512 && max_pace_ > kWidestAvx512Pace)
-    throw Error("the avx512bw pace kernel follows paces up to " + std::to_string(kWidestAvx512Pace) +
-                " places per frame; max_pace is " + std::to_string(max_pace_));
   if (tolerance_ < 0 || tolerance_ > 2)
     throw Error("pace_tolerance " + std::to_string(tolerance_) + " is out of range; expected 0..2 places");
-  pace_kernels::kernelFor(kernel_);  // throws now rather than at the first frame
   setSequenceLength(sequence_length);
   raw_.resize(kChunk + 2 * static_cast<size_t>(tolerance_));
   entry_.resize(kChunk);
@@ -290,9 +283,6 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   best_.resize(old_best_.size());
   chunk.old_best = old_best_.data() + pad_;
   chunk.best = best_.data() + pad_;
-  // The AVX-512 kernel reads the places behind a block from it and the block before: at most 31 places.
-  const pace_kernels::ChunkFn kernel = pace_kernels::kernelFor(
-      kernel_ == PaceKernel::kBest && max_pace_ > kWidestAvx512Pace ? PaceKernel::kPortable : kernel_);
   uint64_t distance_sum = 0, square_sum = 0;
   // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
   for (size_t k = 0; k < chunks; ++k)
@@ -321,7 +311,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
       rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
     }
     distances(query, reference, chunk.begin, chunk.m);
-    const pace_kernels::ChunkSums sums = kernel(chunk);
+    const pace_kernels::ChunkSums sums = kernel_(chunk);
     distance_sum += sums.sum;
     square_sum += sums.squares;
     chunk_minimum_[k] = costOf(sums.minimum);

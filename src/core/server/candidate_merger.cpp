@@ -95,8 +95,7 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
   StreamDecision& stream = found->second;
   out.status = stream.decision.decide(d);
   out.score = stream.decision.score(d);
-  std::vector<MergedOutcome> confirmed = stream.confirmation.stored(out);
-  out.confirmed = std::move(confirmed);
+  out.confirmed = stream.confirmation.stored(out);
   return out;
 }
 
