@@ -4,7 +4,8 @@
 it published with openable_eval against the stream's own ground truth.
 
   scripts/pace_eval.py --first DIR --second DIR --config FILE.yaml --out DIR [--profile P]... [--first-profile P]
-                       [--tolerance T] [--frames N] [--bin DIR] [--set key=value]... [--jobs N] [--markdown] [--misses]
+                       [--tolerance T] [--frames N] [--bin DIR] [--set key=value]... [--camera-info FILE]
+                       [--jobs N] [--markdown] [--misses]
 
 A profile resamples a traversal of n frames (no synthetic image: frames are skipped or repeated):
   1x            every frame once (the first pass's pace)
@@ -18,6 +19,7 @@ A profile resamples a traversal of n frames (no synthetic image: frames are skip
 Ground truth: a frame of the second traversal that shows place k is a true loop with every frame of the first
 traversal that shows a place within T of k (openable_eval --pairs). The first traversal has no loop.
 
+--camera-info FILE verifies candidates geometrically with that camera (openable_offline --camera-info).
 --frames N takes the first N frames of each traversal (a short route). Prints one line per profile: published,
 wrong, precision, recall (and --markdown, a table row); --misses adds where the recall went: the statuses (in
 decisions.csv) of the frames that have a true loop and got no right one published.
@@ -132,6 +134,8 @@ def run(args, profile):
                '--reference', os.path.join(out, 'stream'), '--output', os.path.join(out, 'run')]
     for assignment in args.set:
         command += ['--set', assignment]
+    if args.camera_info:
+        command += ['--camera-info', args.camera_info]
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
     subprocess.run([os.path.join(args.bin, 'openable_eval'), '--published', os.path.join(out, 'run', 'loop_closures.csv'),
                     '--pairs', os.path.join(out, 'pairs.txt'), '--frames', str(frames),
@@ -175,6 +179,7 @@ def main():
     parser.add_argument('--bin', default=os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'build', 'ws',
                                                       'devel', 'lib', 'openable_ros'))
     parser.add_argument('--set', action='append', default=[])
+    parser.add_argument('--camera-info', default='')
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--markdown', action='store_true')
     args = parser.parse_args()

@@ -143,7 +143,7 @@ std::vector<ConfigProblem> Config::problems() const
     if (k.key.type == "int")
       bad({k.key.name}, text,
           "an integer in [" + std::to_string(int64_t(k.key.min)) + ", " + std::to_string(int64_t(k.key.max)) + "]");
-    else if (k.key.name == "threshold")
+    else if (k.key.name == "threshold" || k.key.name == "verified_min_uniqueness")
       bad({k.key.name}, text, "-1 (off) or a number in [0, 1]");
     else
       bad({k.key.name}, text,
@@ -189,6 +189,8 @@ std::vector<ConfigProblem> Config::problems() const
         "an integer in [0, " + std::to_string(sequence_length) + "] (at most sequence_length)");
   if (threshold > -1.0 && threshold < 0.0)
     bad({"threshold"}, formatDouble(threshold), "-1 (off) or a number in [0, 1]");
+  if (verified_min_uniqueness > -1.0 && verified_min_uniqueness < 0.0)
+    bad({"verified_min_uniqueness"}, formatDouble(verified_min_uniqueness), "-1 (off) or a number in [0, 1]");
   // In 64 bits: sequence_length and exclusion_window may themselves be out of range (up to INT_MAX) here.
   const int64_t history_floor = 2 * (int64_t(sequence_length) + int64_t(exclusion_window));
   if (max_history > 0 && max_history <= history_floor)
@@ -251,6 +253,7 @@ Config Config::paper()
   c.min_candidates = 60;
   c.continue_uniqueness = 1.0;
   c.confirm_frames = 0;
+  c.verified_min_uniqueness = -1.0;
   return c;
 }
 

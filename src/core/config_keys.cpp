@@ -175,6 +175,15 @@ const std::vector<KeyAccess>& table()
               "loop-closure decision: a loop closure is published once this many more stored frames go on with its "
               "run; it arrives that many keyframes late, with its own stamp (0 = at once)",
               &Config::confirm_frames).range(0, 1000).live(),
+      makeKey("verified_min_uniqueness",
+              "loop-closure decision with geometric verification: a frame turned down as not unique, inconsistent "
+              "or too early is published when verification accepts its best match and its uniqueness is at least "
+              "this (-1 = off)",
+              &Config::verified_min_uniqueness).range(-1, 1).live(),
+      makeKey("verification_veto",
+              "loop-closure decision with geometric verification: a loop closure that verification rejects is not "
+              "published (false: appearance decides it, published without a relative pose)",
+              &Config::verification_veto).live(),
       makeKey("exclusion_seconds",
               "loop-closure mode: frames stamped less than this before the query are never matched (s; 0 = off)",
               &Config::exclusion_seconds).range(0, 1e9).live(),

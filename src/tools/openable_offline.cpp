@@ -114,6 +114,7 @@ openable::LoopCsvFrame csvFrame(long query, long match, const openable::FrameOut
   f.shift = d.best.shift;
   f.query_session = query_session;
   f.match_session = d.best.session;
+  f.inliers = outcome.verification_ran ? outcome.verification.inliers : -1;
   return f;
 }
 

@@ -1,6 +1,7 @@
 // LoopDecision: known answers on hand-made detections, and a property test against a naive reference.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <random>
 
@@ -207,4 +208,97 @@ TEST(LoopDecision, ContinuationIsOffAtOrAboveMinUniqueness)
   for (uint64_t m = 20; m < 23; ++m)
     decision.decide(candidate(m, 0.2f));
   EXPECT_EQ(decision.decide(candidate(23, 0.09f)), FrameStatus::NotUnique);
+}
+
+namespace
+{
+/// A geometry check that answers `accept` and counts how often it was asked.
+struct CountingGeometry
+{
+  bool accept = true;
+  int asked = 0;
+  LoopDecision::GeometryCheck check()
+  {
+    return [this]
+    {
+      ++asked;
+      return accept;
+    };
+  }
+};
+
+Config verifiedConfig(double verified_min_uniqueness)
+{
+  Config c = decisionConfig();
+  c.verified_min_uniqueness = verified_min_uniqueness;
+  return c;
+}
+}  // namespace
+
+TEST(LoopDecision, GeometryStandsInForUniquenessButTheRunMustStillBeConsistent)
+{
+  LoopDecision decision(verifiedConfig(0.02));
+  CountingGeometry geometry;
+  // Below min_uniqueness (0.1): confirmed by geometry, each frame joins the run; published once consistent.
+  EXPECT_EQ(decision.decide(candidate(40, 0.05f), geometry.check()), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(41, 0.05f), geometry.check()), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(42, 0.05f), geometry.check()), FrameStatus::Published);
+  EXPECT_EQ(geometry.asked, 3);
+  // A frame that passes the gates itself is not sent to verification by the decision.
+  EXPECT_EQ(decision.decide(candidate(43, 0.3f), geometry.check()), FrameStatus::Published);
+  EXPECT_EQ(geometry.asked, 3);
+  // Geometry does not make an inconsistent run consistent: a jump starts a new run, verified or not.
+  EXPECT_EQ(decision.decide(candidate(90, 0.05f), geometry.check()), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(91, 0.3f), geometry.check()), FrameStatus::Inconsistent);
+}
+
+TEST(LoopDecision, GeometryIsAskedOnlyForFramesThatLackAppearanceEvidence)
+{
+  LoopDecision decision(verifiedConfig(0.02));
+  CountingGeometry geometry;
+  EXPECT_EQ(decision.decide(candidate(40, 0.01f), geometry.check()), FrameStatus::NotUnique);  // below 0.02
+  EXPECT_EQ(decision.decide(Detection(), geometry.check()), FrameStatus::TooEarly);           // no candidate
+  EXPECT_EQ(geometry.asked, 0);
+  // Fewer than min_candidates places (10): geometry stands in for the minimum too.
+  EXPECT_EQ(decision.decide(candidate(40, 0.5f, 5), geometry.check()), FrameStatus::Inconsistent);
+  EXPECT_EQ(geometry.asked, 1);
+  // Never for the distance gate.
+  Config thresholded = verifiedConfig(0.02);
+  thresholded.threshold = 0.1;
+  LoopDecision gated(thresholded);
+  EXPECT_EQ(gated.decide(candidate(5, 0.05f, 100, 0.2f), geometry.check()), FrameStatus::AboveThreshold);
+  EXPECT_EQ(geometry.asked, 1);
+  // Rejected by geometry: the frame is turned down as before, and the run ends.
+  LoopDecision rejected(verifiedConfig(0.02));
+  geometry.accept = false;
+  EXPECT_EQ(rejected.decide(candidate(40, 0.05f), geometry.check()), FrameStatus::NotUnique);
+  EXPECT_EQ(geometry.asked, 2);
+}
+
+TEST(LoopDecision, GeometryIsNeverAskedWhenOffOrAbsent)
+{
+  LoopDecision off(verifiedConfig(-1.0));
+  CountingGeometry geometry;
+  for (uint64_t i = 0; i < 5; ++i)
+    EXPECT_EQ(off.decide(candidate(40 + i, 0.05f), geometry.check()), FrameStatus::NotUnique);
+  EXPECT_EQ(geometry.asked, 0);
+  LoopDecision without(verifiedConfig(0.0));
+  for (uint64_t i = 0; i < 5; ++i)
+    EXPECT_EQ(without.decide(candidate(40 + i, 0.05f)), FrameStatus::NotUnique);
+}
+
+TEST(LoopDecision, VerifiedMinUniquenessIsOffOrInTheUnitRange)
+{
+  for (double good : {-1.0, 0.0, 0.05, 1.0})
+  {
+    Config c;
+    c.verified_min_uniqueness = good;
+    EXPECT_TRUE(c.problems().empty()) << good;
+  }
+  for (double bad : {-0.5, -2.0, 1.5, std::nan("")})
+  {
+    Config c;
+    c.verified_min_uniqueness = bad;
+    EXPECT_FALSE(c.problems().empty()) << bad;
+  }
 }

@@ -31,6 +31,7 @@ struct FrameOutcome
   bool has_match_info = false;
   FrameInfo match;        ///< the best match's stored info (with its session), when it is still in the map
   bool verified = false;  ///< `verification` holds an accepted relative pose
+  bool verification_ran = false;  ///< `verification` is the best match's (accepted or not)
   Verification verification;
   std::string verification_note;  ///< why verification did not run or failed (empty when verified)
   StageTimes times;

@@ -14,8 +14,9 @@ namespace openable
 /// - loop_closures.csv: one row per published loop closure,
 ///   `query,match,distance,score,status[,direction,shift],query_session,match_session`
 ///   (direction and shift with a panoramic camera);
-/// - decisions.csv: one row per frame, `query,match,distance,score,status,accepted,pace`
-///   (distance, score and pace `nan` when the frame had no candidate, match -1).
+/// - decisions.csv: one row per frame, `query,match,distance,score,status,accepted,pace,inliers`
+///   (distance, score and pace `nan` when the frame had no candidate, match -1; inliers -1 when geometric
+///   verification did not run on the frame).
 /// Numbers are written with 6 significant digits.
 
 /// What the files say of one frame.
@@ -32,6 +33,7 @@ struct LoopCsvFrame
   int shift = 0;               ///< of the best match (panoramic files only)
   uint32_t query_session = 0;  ///< session index of the query
   uint32_t match_session = 0;  ///< session index of the best match
+  int inliers = -1;            ///< geometric verification's inliers for the best match; -1 when it did not run
 };
 
 /// Collects the rows of both files, frame after frame; the caller writes the texts where it wants them. A row's

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -57,6 +58,7 @@ struct DecisionOptions
   int consistent_frames;        ///< frames that must agree before a loop is published
   int consistency_tolerance;    ///< places a match may be off the run's line
   int max_pace;                 ///< a run advances from 1 / max_pace to max_pace places per frame
+  double verified_min_uniqueness;  ///< a turned-down frame verification may publish is at least this unique (-1: off)
 
   static DecisionOptions from(const Config& config);
 };
@@ -68,8 +70,14 @@ public:
   /// Shorthand: LoopDecision(DecisionOptions::from(config)).
   explicit LoopDecision(const Config& config);
 
+  /// Whether geometry confirms the frame's best match (geometric verification); asked at most once a frame.
+  using GeometryCheck = std::function<bool()>;
+
   /// Decides on one matched frame. Returns Published when every rule passes; verification comes after.
-  FrameStatus decide(const Detection& detection);
+  /// With `geometry` (and verified_min_uniqueness >= 0), a frame that fails only the uniqueness gate or the
+  /// minimum of places, but is at least verified_min_uniqueness unique and within the distance gate, joins the
+  /// run when geometry confirms its best match: published once the run is consistent, as any other.
+  FrameStatus decide(const Detection& detection, const GeometryCheck& geometry = GeometryCheck());
   /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
   /// candidates, or fewer than min_candidates: a lone candidate has no rival and would score 1).
   float score(const Detection& detection) const;
@@ -82,6 +90,11 @@ public:
 
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
+  /// The frame may be published on geometry alone, for want of `why` (the first rule it failed).
+  bool geometryMayStandIn(const Detection& detection, FrameStatus why) const;
+  /// The frame passed the gates (or geometry stood in for them): the run goes on or starts with it. Returns
+  /// Published once the run is consistent, else Inconsistent.
+  FrameStatus joinRun(const Detection& detection);
   bool advancesWithRun(const Detection& detection) const;
   bool recentFramesFollowOneLine() const;
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.

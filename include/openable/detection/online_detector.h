@@ -144,7 +144,11 @@ private:
   /// The camera stands still: the frame is textured and its descriptor within standstill_distance of the last
   /// stored frame's (a textureless frame, e.g. a tunnel, says nothing about motion and is matched as usual).
   bool standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
-  void verify(const FrameInput& input, FrameOutcome& outcome);
+  /// The input's verification features (options_.verify with a camera), or null (the note says why).
+  std::unique_ptr<FrameFeatures> queryFeatures(const FrameInput& input, FrameOutcome& outcome) const;
+  /// Verifies the best match against `query` into outcome.verification (verification_ran; when it cannot run,
+  /// the note says why).
+  void verifyBestMatch(const FrameFeatures* query, FrameOutcome& outcome) const;
 
   Config config_;
   OnlineOptions options_;

@@ -223,12 +223,12 @@ std::string LoopCsvWriter::loopClosures() const
 std::string LoopCsvWriter::decisions() const
 {
   std::ostringstream out;
-  out << "query,match,distance,score,status,accepted,pace\n";
+  out << "query,match,distance,score,status,accepted,pace,inliers\n";
   for (const LoopCsvFrame& f : frames_)
   {
     const auto known = [&f](float v) { return formatFloat(f.has_candidates ? v : NAN); };
     out << f.query << "," << f.match << "," << known(f.distance) << "," << known(f.score) << "," << toString(f.status)
-        << "," << (f.status == FrameStatus::Published ? 1 : 0) << "," << known(f.pace) << "\n";
+        << "," << (f.status == FrameStatus::Published ? 1 : 0) << "," << known(f.pace) << "," << f.inliers << "\n";
   }
   return out.str();
 }

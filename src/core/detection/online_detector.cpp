@@ -275,8 +275,6 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.query.id = outcome.detection.query_id;
   if (!detector_.localisationMode())
     outcome.query.session = static_cast<uint32_t>(detector_.ownSession());
-  outcome.status = decision_.decide(outcome.detection);
-  outcome.score = decision_.score(outcome.detection);
   if (outcome.detection.has_candidates)
   {
     const PlaceDatabase& frames = detector_.map().frames(outcome.detection.best.session);
@@ -290,7 +288,32 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   }
   outcome.times.match_ms = millisecondsSince(start);
   start = std::chrono::steady_clock::now();
-  verify(input, outcome);
+  std::unique_ptr<FrameFeatures> query = queryFeatures(input, outcome);
+  // Verification runs at most once a frame: where the decision asks for it (a frame that lacks appearance
+  // evidence), or on what it published.
+  bool asked = false;
+  const auto verifyOnce = [&]
+  {
+    if (!asked)
+      verifyBestMatch(query.get(), outcome);
+    asked = true;
+    return outcome.verified;
+  };
+  LoopDecision::GeometryCheck geometry;
+  if (options_.verify)
+    geometry = verifyOnce;
+  outcome.status = decision_.decide(outcome.detection, geometry);
+  outcome.score = decision_.score(outcome.detection);
+  if (options_.verify && outcome.published())
+  {
+    verifyOnce();
+    if (!outcome.verification_ran && options_.verify_required)  // nothing through that it could not check
+      outcome.status = FrameStatus::Unverified;
+    else if (outcome.verification_ran && !outcome.verified && config_.verification_veto)
+      outcome.status = FrameStatus::FailedVerification;
+  }
+  if (query && !detector_.localisationMode())
+    features_.insert(std::move(*query));  // every stored frame keeps its features: later frames may close a loop with it
   outcome.times.verify_ms = millisecondsSince(start);
   outcome.frame = frames_;
   std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome);
@@ -301,57 +324,48 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   return outcome;
 }
 
-void OnlineDetector::verify(const FrameInput& input, FrameOutcome& outcome)
+std::unique_ptr<FrameFeatures> OnlineDetector::queryFeatures(const FrameInput& input, FrameOutcome& outcome) const
 {
-  if (!options_.verify)
-    return;
-  // Every stored frame keeps its features: later frames may close a loop with it.
-  std::unique_ptr<FrameFeatures> query;
-  if (verifier_ && !input.image.empty())
+  if (!options_.verify || !verifier_ || input.image.empty())
+    return nullptr;
+  try
   {
-    try
-    {
-      const cv::Mat right = verifier_->camera().stereo() ? input.right : cv::Mat();
-      query = std::make_unique<FrameFeatures>(verifier_->extract(input.image, right, outcome.query.id));
-    }
-    catch (const Error& e)
-    {
-      outcome.verification_note = std::string("no features: ") + e.what();
-    }
-    catch (const cv::Exception& e)
-    {
-      outcome.verification_note = std::string("no features (OpenCV): ") + e.what();
-    }
+    const cv::Mat right = verifier_->camera().stereo() ? input.right : cv::Mat();
+    return std::make_unique<FrameFeatures>(verifier_->extract(input.image, right, outcome.query.id));
   }
-  if (outcome.published())
+  catch (const Error& e)
   {
-    const FrameFeatures* match = features_.find(outcome.detection.best.id);
-    if (!verifier_)
-      outcome.verification_note = "no camera yet";
-    else if (!query)
-    {
-      if (outcome.verification_note.empty())  // else it already says why extraction failed
-        outcome.verification_note = "no query features";
-    }
-    else if (!match)
-      outcome.verification_note = "match frame has no features (it came before the camera, or was evicted)";
-    else
-    {
-      outcome.verification = verifier_->verify(*match, *query);
-      outcome.verified = outcome.verification.accepted();
-      outcome.verification_note =
-          outcome.verified ? ""
-                           : std::string(toString(outcome.verification.status)) +
-                                 (outcome.verification.reason.empty() ? "" : " (" + outcome.verification.reason + ")");
-      if (!outcome.verified)
-        outcome.status = FrameStatus::FailedVerification;
-    }
-    // A required verification never lets an unverified candidate through.
-    if (!outcome.verified && outcome.published() && options_.verify_required)
-      outcome.status = FrameStatus::Unverified;
+    outcome.verification_note = std::string("no features: ") + e.what();
   }
-  if (query && !detector_.localisationMode())
-    features_.insert(std::move(*query));
+  catch (const cv::Exception& e)
+  {
+    outcome.verification_note = std::string("no features (OpenCV): ") + e.what();
+  }
+  return nullptr;
+}
+
+void OnlineDetector::verifyBestMatch(const FrameFeatures* query, FrameOutcome& outcome) const
+{
+  const FrameFeatures* match = features_.find(outcome.detection.best.id);
+  if (!verifier_)
+    outcome.verification_note = "no camera yet";
+  else if (!query)
+  {
+    if (outcome.verification_note.empty())  // else it already says why extraction failed
+      outcome.verification_note = "no query features";
+  }
+  else if (!match)
+    outcome.verification_note = "match frame has no features (it came before the camera, or was evicted)";
+  else
+  {
+    outcome.verification = verifier_->verify(*match, *query);
+    outcome.verification_ran = true;
+    outcome.verified = outcome.verification.accepted();
+    outcome.verification_note =
+        outcome.verified ? ""
+                         : std::string(toString(outcome.verification.status)) +
+                               (outcome.verification.reason.empty() ? "" : " (" + outcome.verification.reason + ")");
+  }
 }
 
 bool OnlineDetector::setCamera(const PinholeCamera& camera)
