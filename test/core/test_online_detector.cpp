@@ -127,6 +127,10 @@ TEST(OnlineDetector, VerificationAddsRecallWhereItCanConfirmAndNoWrongLoop)
     const Scored with = score(outcomes, 200, 2);
     const Scored without = score(runStream(frames, config), 200, 2);
     EXPECT_EQ(with.wrong, 0) << first << " -> " << second << ": " << with.published << " published";
+    const std::string stream = std::string(first) + "_" + second;
+    RecordProperty(stream + "_recall_without", std::to_string(without.recall));
+    RecordProperty(stream + "_recall_with", std::to_string(with.recall));
+    RecordProperty(stream + "_wrong_with", with.wrong);
     EXPECT_GE(with.recall, without.recall + gain) << first << " -> " << second;
     int verified = 0;
     for (size_t t = 0; t < outcomes.size(); ++t)
