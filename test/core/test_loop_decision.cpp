@@ -108,17 +108,23 @@ TEST(LoopDecision, ScoreIsTheUniquenessAndZeroWhileTooEarly)
   EXPECT_FLOAT_EQ(decision.score(Detection()), 0.0f);
 }
 
-TEST(LoopDecision, EqualsANaiveReferenceOnRandomStreams)
+namespace
 {
-  // The reference re-derives each decision from the whole list of earlier detections.
+/// Random streams against a naive reference that re-derives each decision from the whole list of earlier
+/// detections. With `geometry`, each frame also gets a random verification answer: a frame passes when it is
+/// unique enough, or when it is at least verified_min_uniqueness unique and verified.
+void expectNaiveReference(bool geometry)
+{
   std::mt19937 rng(7);
   for (int trial = 0; trial < 50; ++trial)
   {
     Config c = decisionConfig();
     c.consistent_frames = 1 + trial % 5;
     c.consistency_tolerance = trial % 3;
+    c.verified_min_uniqueness = geometry ? 0.05 : -1.0;
     LoopDecision decision(c);
     std::vector<Detection> seen;
+    std::vector<bool> verified;
     uint64_t match = 100;
     for (int t = 0; t < 200; ++t)
     {
@@ -127,23 +133,28 @@ TEST(LoopDecision, EqualsANaiveReferenceOnRandomStreams)
           kind < 6 ? match + 1 : (kind < 8 ? match + std::uniform_int_distribution<int>(0, 4)(rng) : 300 - match % 50);
       const float u = std::uniform_real_distribution<float>(0.0f, 0.3f)(rng);
       seen.push_back(candidate(match, u));
-      // Naive: the run is the longest suffix of gate-passing frames where every step and the whole span
-      // advance one place per frame within the tolerance.
-      const auto passes = [&c](const Detection& d) { return d.uniqueness >= c.min_uniqueness; };
+      verified.push_back(std::bernoulli_distribution(0.5)(rng));
+      // Naive: the run is the longest suffix of passing frames where every step and the whole span advance
+      // one place per frame within the tolerance.
+      const auto passes = [&](size_t k)
+      {
+        const float uniqueness = seen[k].uniqueness;
+        return uniqueness >= c.min_uniqueness || (geometry && uniqueness >= c.verified_min_uniqueness && verified[k]);
+      };
       FrameStatus expected = FrameStatus::NotUnique;
-      if (passes(seen.back()))
+      if (passes(seen.size() - 1))
       {
         // Runs restart where a step or the span from the run's start breaks: replay from the start.
         int run = 0;
         uint64_t start = 0, previous = 0;
-        for (const Detection& d : seen)
+        for (size_t k = 0; k < seen.size(); ++k)
         {
-          if (!passes(d))
+          if (!passes(k))
           {
             run = 0;
             continue;
           }
-          const long id = static_cast<long>(d.best.id);
+          const long id = static_cast<long>(seen[k].best.id);
           const bool agrees = run > 0 && std::labs(id - static_cast<long>(previous) - 1) <= c.consistency_tolerance &&
                               std::labs(id - static_cast<long>(start) - run) <= c.consistency_tolerance;
           if (agrees)
@@ -151,15 +162,29 @@ TEST(LoopDecision, EqualsANaiveReferenceOnRandomStreams)
           else
           {
             run = 1;
-            start = d.best.id;
+            start = seen[k].best.id;
           }
-          previous = d.best.id;
+          previous = seen[k].best.id;
         }
         expected = run >= c.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;
       }
-      ASSERT_EQ(decision.decide(seen.back()), expected) << "trial " << trial << " frame " << t;
+      const bool answer = verified.back();
+      const LoopDecision::GeometryCheck check = [answer] { return answer; };
+      ASSERT_EQ(decision.decide(seen.back(), geometry ? check : LoopDecision::GeometryCheck()), expected)
+          << "trial " << trial << " frame " << t;
     }
   }
+}
+}  // namespace
+
+TEST(LoopDecision, EqualsANaiveReferenceOnRandomStreams)
+{
+  expectNaiveReference(false);
+}
+
+TEST(LoopDecision, WithGeometryEqualsANaiveReferenceOnRandomStreams)
+{
+  expectNaiveReference(true);
 }
 
 TEST(LoopDecision, APublishedRunContinuesThroughLessUniqueFramesOnItsLineOnly)
