@@ -288,17 +288,19 @@ TEST_F(PublishedFiles, WhatTheWriterWritesTheReadersRead)
   loop.shift = 2;
   loop.query_session = 3;
   loop.match_session = 1;
+  loop.inliers = 23;
   writer.add(loop);
   openable::LoopCsvFrame rival = loop;
   rival.query = 6;
+  rival.inliers = -1;
   rival.status = openable::FrameStatus::NotUnique;
   rival.pace = 1.5f;
   writer.add(rival);
   EXPECT_EQ(writer.decisions(),
-            "query,match,distance,score,status,accepted,pace\n"
-            "0,-1,nan,nan,too_early,0,nan\n"
-            "5,1,0.25,0.5,published,1,1\n"
-            "6,1,0.25,0.5,not_unique,0,1.5\n");
+            "query,match,distance,score,status,accepted,pace,inliers\n"
+            "0,-1,nan,nan,too_early,0,nan,-1\n"
+            "5,1,0.25,0.5,published,1,1,23\n"
+            "6,1,0.25,0.5,not_unique,0,1.5,-1\n");
   EXPECT_EQ(writer.loopClosures(),
             "query,match,distance,score,status,direction,shift,query_session,match_session\n"
             "5,1,0.25,0.5,published,-1,2,3,1\n");
