@@ -100,10 +100,10 @@ struct Config
                                       ///< min_uniqueness) whose matches keep to its line (>= min_uniqueness: off)
   int confirm_frames = 3;  ///< a loop closure is published once this many more stored frames go on with its run
                            ///< (0 = at once; LoopConfirmation)
-  /// With geometric verification: a frame the appearance rules turned down (not unique, not yet consistent, too
-  /// few places) is published when verification accepts its best match and its uniqueness is at least this
-  /// (-1 = off: verification only checks what appearance published).
-  double verified_min_uniqueness = 0.0;
+  /// With geometric verification: a frame below min_uniqueness (or with fewer than min_candidates places) joins
+  /// its run when verification accepts its best match and its uniqueness is at least this; the run must still be
+  /// consistent (-1 = off: verification only checks what appearance published).
+  double verified_min_uniqueness = 0.02;
   bool verification_veto = true;  ///< with verification: a loop closure it rejects is not published
                                   ///< (false: appearance alone decides it, published without a relative pose)
   double exclusion_seconds = 0.0;  ///< loop-closure mode: frames stamped less than this before the query are

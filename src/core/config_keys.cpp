@@ -176,9 +176,9 @@ const std::vector<KeyAccess>& table()
               "run; it arrives that many keyframes late, with its own stamp (0 = at once)",
               &Config::confirm_frames).range(0, 1000).live(),
       makeKey("verified_min_uniqueness",
-              "loop-closure decision with geometric verification: a frame turned down as not unique, inconsistent "
-              "or too early is published when verification accepts its best match and its uniqueness is at least "
-              "this (-1 = off)",
+              "loop-closure decision with geometric verification: a frame below min_uniqueness (or with fewer than "
+              "min_candidates places) joins its run when verification accepts its best match and its uniqueness is "
+              "at least this; the run must still be consistent (-1 = off)",
               &Config::verified_min_uniqueness).range(-1, 1).live(),
       makeKey("verification_veto",
               "loop-closure decision with geometric verification: a loop closure that verification rejects is not "

@@ -58,7 +58,7 @@ struct DecisionOptions
   int consistent_frames;        ///< frames that must agree before a loop is published
   int consistency_tolerance;    ///< places a match may be off the run's line
   int max_pace;                 ///< a run advances from 1 / max_pace to max_pace places per frame
-  double verified_min_uniqueness;  ///< a turned-down frame verification may publish is at least this unique (-1: off)
+  double verified_min_uniqueness;  ///< geometry stands in for min_uniqueness down to this uniqueness (-1: off)
 
   static DecisionOptions from(const Config& config);
 };
@@ -90,7 +90,7 @@ public:
 
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
-  /// The frame may be published on geometry alone, for want of `why` (the first rule it failed).
+  /// Geometry may stand in for the rule the frame failed, `why`: the uniqueness gate or the minimum of places.
   bool geometryMayStandIn(const Detection& detection, FrameStatus why) const;
   /// The frame passed the gates (or geometry stood in for them): the run goes on or starts with it. Returns
   /// Published once the run is consistent, else Inconsistent.
