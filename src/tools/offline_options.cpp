@@ -32,6 +32,8 @@ const char* const kUsage =
     "                     stereo baseline). Loops that fail are failed_verification, unverifiable ones\n"
     "                     unverified; neither is published. Loop-closure mode only (a map keeps no features).\n"
     "                     The verifier's thresholds are the verify_* keys (--set verify_min_inliers=20).\n"
+    "                     To add recall with it: --set verification_veto=false (appearance decides what it\n"
+    "                     rejects); frames below min_uniqueness are verified too (verified_min_uniqueness)\n"
     "  --verify-optional  : unverifiable loops go out without a pose (~verify_required false)\n"
     "  --map-in FILE    : continue a saved map: the stream becomes a new session, matched against every\n"
     "                     session of the map and its own past (loop-closure mode only). Frame numbers in the\n"
@@ -49,7 +51,7 @@ const char* const kUsage =
     "  --keyframe-angle RAD  : with --poses, or turn this many radians (default 0: turning alone never does)\n"
     "Writes into DIR: distance_matrix.npy, distance_matrix.png, distance_matrix_thresholded.png (with a\n"
     "threshold), loop_closures.csv (published loop closures, with query_session,match_session), decisions.csv\n"
-    "(every frame), timings.json.\n";
+    "(every frame; inliers: the verifier's for the best match, -1 where it did not run), timings.json.\n";
 
 /// The default session name: the stream's file or folder name.
 std::string nameOfPath(const std::string& path)
