@@ -178,7 +178,8 @@ struct Config
     std::string description;
     double min = 0.0;            ///< numbers: smallest allowed value (with has_range)
     double max = 0.0;            ///< numbers: largest allowed value (with has_range)
-    bool has_range = false;      ///< min/max hold (further rules, e.g. threshold's -1, are in validate())
+    bool has_range = false;      ///< min/max hold (rules across keys are in problems())
+    bool minus_one_is_off = false;  ///< with has_range [-1, max]: -1 turns the key off, (-1, 0) is not allowed
     bool min_exclusive = false;  ///< with has_range: min itself is not allowed, (min, max]
     bool max_exclusive = false;  ///< with has_range: max itself is not allowed, [min, max)
     bool live = false;           ///< can change while running (LoopDetector::updateMatching, dynamic_reconfigure)

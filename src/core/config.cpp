@@ -138,13 +138,14 @@ std::vector<ConfigProblem> Config::problems() const
     const double value = std::strtod(text.c_str(), nullptr);
     const bool above_min = k.key.min_exclusive ? value > k.key.min : value >= k.key.min;
     const bool below_max = k.key.max_exclusive ? value < k.key.max : value <= k.key.max;
-    if (above_min && below_max)  // false for NaN too
+    const bool between_off_and_zero = k.key.minus_one_is_off && value > -1.0 && value < 0.0;
+    if (above_min && below_max && !between_off_and_zero)  // false for NaN too
       continue;
     if (k.key.type == "int")
       bad({k.key.name}, text,
           "an integer in [" + std::to_string(int64_t(k.key.min)) + ", " + std::to_string(int64_t(k.key.max)) + "]");
-    else if (k.key.name == "threshold" || k.key.name == "verified_min_uniqueness")
-      bad({k.key.name}, text, "-1 (off) or a number in [0, 1]");
+    else if (k.key.minus_one_is_off)
+      bad({k.key.name}, text, "-1 (off) or a number in [0, " + formatDouble(k.key.max) + "]");
     else
       bad({k.key.name}, text,
           std::string("a number in ") + (k.key.min_exclusive ? "(" : "[") + formatDouble(k.key.min) + ", " +
@@ -187,10 +188,6 @@ std::vector<ConfigProblem> Config::problems() const
   if (min_sequence_length > sequence_length && sequence_length >= 1)
     bad({"min_sequence_length"}, std::to_string(min_sequence_length),
         "an integer in [0, " + std::to_string(sequence_length) + "] (at most sequence_length)");
-  if (threshold > -1.0 && threshold < 0.0)
-    bad({"threshold"}, formatDouble(threshold), "-1 (off) or a number in [0, 1]");
-  if (verified_min_uniqueness > -1.0 && verified_min_uniqueness < 0.0)
-    bad({"verified_min_uniqueness"}, formatDouble(verified_min_uniqueness), "-1 (off) or a number in [0, 1]");
   // In 64 bits: sequence_length and exclusion_window may themselves be out of range (up to INT_MAX) here.
   const int64_t history_floor = 2 * (int64_t(sequence_length) + int64_t(exclusion_window));
   if (max_history > 0 && max_history <= history_floor)

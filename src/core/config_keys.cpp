@@ -130,7 +130,7 @@ const std::vector<KeyAccess>& table()
               "sequence_length frames (1 = any, the mean of the available terms)",
               &Config::min_sequence_length).range(0, 10000).live(),
       makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = no distance gate",
-              &Config::threshold).range(-1, 1).live(),
+              &Config::threshold).range(-1, 1).minusOneIsOff().live(),
       makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
               &Config::exclusion_window).range(0, 100000000).live(),
       makeKey("top_k", "candidates reported per frame", &Config::top_k).range(1, 1000).live(),
@@ -179,7 +179,7 @@ const std::vector<KeyAccess>& table()
               "loop-closure decision with geometric verification: a frame below min_uniqueness (or with fewer than "
               "min_candidates places) joins its run when verification accepts its best match and its uniqueness is "
               "at least this; the run must still be consistent (-1 = off)",
-              &Config::verified_min_uniqueness).range(-1, 1).live(),
+              &Config::verified_min_uniqueness).range(-1, 1).minusOneIsOff().live(),
       makeKey("verification_veto",
               "loop-closure decision with geometric verification: a loop closure that verification rejects is not "
               "published (false: appearance decides it, published without a relative pose)",

@@ -33,6 +33,12 @@ struct KeyAccess
     key.min_exclusive = true;
     return *this;
   }
+  /// A range [-1, high] whose -1 means off: the numbers between -1 and 0 are not allowed.
+  KeyAccess minusOneIsOff()
+  {
+    key.minus_one_is_off = true;
+    return *this;
+  }
   /// The range's high end itself is not allowed: [low, high).
   KeyAccess belowMax()
   {

@@ -15,8 +15,8 @@ struct StageTimes
 {
   double preprocess_ms = 0.0;
   double describe_ms = 0.0;
-  double match_ms = 0.0;  ///< match and decide
-  double verify_ms = 0.0;
+  double match_ms = 0.0;   ///< match
+  double verify_ms = 0.0;  ///< decide, with the verification (and its features) the decision needs
 };
 
 /// The outcome of one frame (OnlineDetector::process).

@@ -90,6 +90,8 @@ public:
 
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
+  /// The distance gate is set and the best match fails it.
+  bool aboveThreshold(const Detection& detection) const;
   /// Geometry may stand in for the rule the frame failed, `why`: the uniqueness gate or the minimum of places.
   bool geometryMayStandIn(const Detection& detection, FrameStatus why) const;
   /// The frame passed the gates (or geometry stood in for them): the run goes on or starts with it. Returns

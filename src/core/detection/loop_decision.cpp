@@ -94,18 +94,20 @@ bool LoopDecision::geometryMayStandIn(const Detection& detection, FrameStatus wh
   // run: verification accepts a place 3 or 4 frames off as readily as the right one (same room, 30 to 57
   // inliers), and at the start of a revisit the sequences lag by that much. Publishing a verified frame
   // without a consistent run put 9 such near misses among 143 loops on Gardens Point day_right -> day_left.
-  if (options_.verified_min_uniqueness < 0.0 || !detection.has_candidates)
-    return false;
-  if (why != FrameStatus::NotUnique && why != FrameStatus::TooEarly)
-    return false;
-  if (options_.threshold >= 0.0 && detection.best.distance > options_.threshold)
-    return false;
-  return detection.uniqueness >= options_.verified_min_uniqueness;
+  // (A frame too early never met the distance gate: it is checked here.)
+  const bool wants_evidence = why == FrameStatus::NotUnique || why == FrameStatus::TooEarly;
+  return options_.verified_min_uniqueness >= 0.0 && detection.has_candidates && wants_evidence &&
+         !aboveThreshold(detection) && detection.uniqueness >= options_.verified_min_uniqueness;
+}
+
+bool LoopDecision::aboveThreshold(const Detection& detection) const
+{
+  return options_.threshold >= 0.0 && detection.best.distance > options_.threshold;
 }
 
 bool LoopDecision::gatesPass(const Detection& detection, FrameStatus& why) const
 {
-  if (options_.threshold >= 0.0 && detection.best.distance > options_.threshold)
+  if (aboveThreshold(detection))
   {
     why = FrameStatus::AboveThreshold;
     return false;

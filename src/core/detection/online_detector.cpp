@@ -299,10 +299,8 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
     asked = true;
     return outcome.verified;
   };
-  LoopDecision::GeometryCheck geometry;
-  if (options_.verify)
-    geometry = verifyOnce;
-  outcome.status = decision_.decide(outcome.detection, geometry);
+  outcome.status = decision_.decide(outcome.detection,
+                                    options_.verify ? LoopDecision::GeometryCheck(verifyOnce) : nullptr);
   outcome.score = decision_.score(outcome.detection);
   if (options_.verify && outcome.published())
   {
