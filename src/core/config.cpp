@@ -250,6 +250,7 @@ Config Config::paper()
   c.min_candidates = 60;
   c.continue_uniqueness = 1.0;
   c.confirm_frames = 0;
+  c.run_start_tolerance = -1;
   c.verified_min_uniqueness = -1.0;
   return c;
 }

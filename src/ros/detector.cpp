@@ -293,13 +293,14 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
   if (outcome.published())
     publishLoop(msg, outcome, outcome);
   // Loop closures of earlier frames that this one confirmed (confirm_frames): each with its own frame's stamp.
-  // Their frames were counted pending; they count as decided now, as decisions.csv has them in the end.
+  // Their frames were counted pending (or inconsistent: a run's first frames); they count as decided now, as
+  // decisions.csv has them in the end.
   for (const openable::FrameOutcome& earlier : outcome.confirmed)
   {
     std_msgs::Header earlier_header = header;
     if (earlier.query.stamp > 0.0)
       earlier_header.stamp = ros::Time(earlier.query.stamp);
-    moveStatus(openable::FrameStatus::Pending, earlier.status, 1);
+    moveStatus(earlier.status_before, earlier.status, 1);
     publishLoop(makeLoopClosure(earlier_header, earlier), earlier, outcome);
   }
   const uint64_t dropped = detector_->confirmation().dropped();

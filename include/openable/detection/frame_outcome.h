@@ -39,6 +39,9 @@ struct FrameOutcome
   /// outcome, now Published, with its own `frame`, stamp and source. A caller publishes these, in order, besides
   /// this frame's own outcome when that is published (confirm_frames 0).
   std::vector<FrameOutcome> confirmed;
+  /// In `confirmed`: the status it had before (Pending, or, for one of its run's first frames published after the
+  /// fact, Inconsistent or Standstill), so a caller that counts statuses moves it from there.
+  FrameStatus status_before = FrameStatus::Pending;
 
   bool published() const
   {

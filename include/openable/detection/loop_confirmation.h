@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
@@ -23,6 +24,10 @@ namespace openable
 /// A frame standing still repeats the last stored frame's decision: while that one is pending, the repeats
 /// wait with it (up to kMaxRepeats) and are confirmed or dropped with it.
 ///
+/// A run's first frames (LoopDecision::joinedBefore): the frames decided Inconsistent just before a published one
+/// are held (with their repeats) until the next stored frame; the ones the decision says join the run's loop wait
+/// with it and are confirmed with it, each with status_before Inconsistent (or Standstill, a repeat).
+///
 /// Outcome: what a pipeline decides for one frame, with a FrameStatus `status` and `published()`
 /// (FrameOutcome in OnlineDetector and the map replay, MergedOutcome in the place servers' CandidateMerger).
 template <typename Outcome>
@@ -38,42 +43,51 @@ public:
     setFrames(frames);
   }
 
-  /// A stored frame, after the decision and verification. A Published outcome becomes Pending (frames > 0).
-  /// Returns the earlier outcomes it confirms, oldest first, each Published; when the frame is not Published
-  /// itself, the run ended and every pending one is dropped.
-  std::vector<Outcome> stored(Outcome& outcome)
+  /// A stored frame, after the decision and verification. A Published outcome becomes Pending (frames > 0);
+  /// `joined_before` of the Inconsistent frames just before it (LoopDecision::joinedBefore) join it. Returns the
+  /// earlier outcomes it confirms, oldest first, each Published (frames 0: the frames that joined it); when the
+  /// frame is not Published itself, the run ended and every pending one is dropped.
+  std::vector<Outcome> stored(Outcome& outcome, size_t joined_before = 0)
   {
     std::vector<Outcome> confirmed;
-    if (frames_ == 0)
-      return confirmed;
     if (!outcome.published())
     {
-      dropped_ += pending();  // the run ended (or never was): what waited for it is not confirmed
+      dropped_ += pending() - joinedPending();  // the run ended (or never was): what waited for it is not confirmed
       waiting_.clear();
+      holdRunStart(outcome);
       return confirmed;
     }
     for (Waiting& w : waiting_)
       ++w.confirmations;
     while (!waiting_.empty() && waiting_.front().confirmations >= frames_)
     {
-      for (Outcome& o : waiting_.front().outcomes)
-      {
-        o.status = FrameStatus::Published;
-        confirmed.push_back(std::move(o));
-      }
+      confirm(waiting_.front(), confirmed);
       waiting_.pop_front();
     }
-    outcome.status = FrameStatus::Pending;
-    waiting_.push_back(Waiting{{outcome}, 0});
+    // The run's first frames that join it: confirmed with this frame.
+    const size_t joined = std::min(joined_before, held_.size());
+    for (auto w = held_.end() - static_cast<long>(joined); w != held_.end(); ++w)
+      if (frames_ == 0)
+        confirm(*w, confirmed);
+      else
+        waiting_.push_back(std::move(*w));
+    held_.clear();
+    if (frames_ > 0)
+    {
+      outcome.status = FrameStatus::Pending;
+      waiting_.push_back(Waiting{{outcome}, 0, false});
+    }
     return confirmed;
   }
 
-  /// A frame standing still that repeats the last stored one's Pending outcome: it waits with it.
+  /// A frame standing still that repeats the last stored one's outcome: it waits with it when that one is Pending
+  /// or held as a run's first frame.
   void repeated(const Outcome& outcome)
   {
-    if (outcome.status != FrameStatus::Pending || waiting_.empty())
+    std::deque<Waiting>& to = outcome.status == FrameStatus::Pending ? waiting_ : held_;
+    if (outcome.published() || to.empty())
       return;
-    std::vector<Outcome>& outcomes = waiting_.back().outcomes;
+    std::vector<Outcome>& outcomes = to.back().outcomes;
     if (outcomes.size() <= kMaxRepeats)
       outcomes.push_back(outcome);
   }
@@ -82,6 +96,7 @@ public:
   void reset()
   {
     waiting_.clear();
+    held_.clear();
   }
   /// New `frames`; what is pending is dropped. Throws Error when negative.
   void setFrames(int frames)
@@ -102,7 +117,7 @@ public:
   {
     return dropped_;
   }
-  /// Outcomes waiting, repeats included.
+  /// Outcomes waiting, repeats included (a run's first frames that joined it too).
   size_t pending() const
   {
     size_t count = 0;
@@ -111,15 +126,51 @@ public:
     return count;
   }
 
+  /// Inconsistent frames held for a run that may still become consistent: at most this many (a run longer than
+  /// that before it is consistent keeps only its last ones; LoopDecision looks back consistent_frames at most).
+  static constexpr size_t kMaxHeld = 1000;
+
 private:
   struct Waiting
   {
     std::vector<Outcome> outcomes;  ///< the stored frame, then its repeats
     int confirmations = 0;          ///< stored frames since it that went on with its run
+    bool joined = true;             ///< one of a run's first frames (not Pending, not counted as dropped)
   };
+
+  void confirm(Waiting& w, std::vector<Outcome>& confirmed)
+  {
+    for (Outcome& o : w.outcomes)
+    {
+      o.status_before = w.joined ? o.status : FrameStatus::Pending;
+      o.status = FrameStatus::Published;
+      confirmed.push_back(std::move(o));
+    }
+  }
+  /// An Inconsistent frame may be one of a run's first frames: held until the next stored frame.
+  void holdRunStart(const Outcome& outcome)
+  {
+    if (outcome.status != FrameStatus::Inconsistent)
+    {
+      held_.clear();
+      return;
+    }
+    held_.push_back(Waiting{{outcome}, 0, true});
+    if (held_.size() > kMaxHeld)
+      held_.pop_front();
+  }
+  size_t joinedPending() const
+  {
+    size_t count = 0;
+    for (const Waiting& w : waiting_)
+      count += w.joined ? w.outcomes.size() : 0;
+    return count;
+  }
+
   int frames_ = 0;
   uint64_t dropped_ = 0;
   std::deque<Waiting> waiting_;
+  std::deque<Waiting> held_;  ///< the Inconsistent frames just before the next stored one, oldest first
 };
 
 using LoopConfirmation = BasicLoopConfirmation<FrameOutcome>;

@@ -59,6 +59,7 @@ struct DecisionOptions
   int consistency_tolerance;    ///< places a match may be off the run's line
   int max_pace;                 ///< a run advances from 1 / max_pace to max_pace places per frame
   double verified_min_uniqueness;  ///< geometry stands in for min_uniqueness down to this uniqueness (-1: off)
+  int run_start_tolerance;         ///< a run's earlier frames within this of its line join it when it is published (-1: off)
 
   static DecisionOptions from(const Config& config);
 };
@@ -78,6 +79,14 @@ public:
   /// minimum of places, but is at least verified_min_uniqueness unique and within the distance gate, joins the
   /// run when geometry confirms its best match: published once the run is consistent, as any other.
   FrameStatus decide(const Detection& detection, const GeometryCheck& geometry = GeometryCheck());
+  /// After a Published decision: how many of the stored frames just before this one (its run's first frames,
+  /// decided Inconsistent while the run was too short) join its loop closure now, published after the fact. Not 0
+  /// only where the run becomes consistent: those frames whose matches lie within run_start_tolerance of the run's
+  /// line, counted back from this frame up to the first that does not. 0 after any other decision.
+  size_t joinedBefore() const
+  {
+    return joined_before_;
+  }
   /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
   /// candidates, or fewer than min_candidates: a lone candidate has no rival and would score 1).
   float score(const Detection& detection) const;
@@ -99,6 +108,8 @@ private:
   FrameStatus joinRun(const Detection& detection);
   bool advancesWithRun(const Detection& detection) const;
   bool recentFramesFollowOneLine() const;
+  /// The run's frames before this one whose matches lie within run_start_tolerance of its line (joinedBefore).
+  size_t runStartOnLine() const;
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
 
@@ -111,6 +122,7 @@ private:
   int previous_direction_ = 1;
   uint32_t previous_session_ = 0;
   std::deque<uint64_t> recent_;  ///< the run's last consistent_frames matches
+  size_t joined_before_ = 0;     ///< joinedBefore() of the last decision
 };
 
 }  // namespace openable

@@ -33,6 +33,7 @@ struct MergedOutcome
   /// Earlier queries of the same stream that this one confirmed (confirm_frames), now Published: publish
   /// these, each with its own query stamp, besides this query when it is published itself (confirm_frames 0).
   std::vector<MergedOutcome> confirmed;
+  FrameStatus status_before = FrameStatus::Pending;  ///< in `confirmed`: as FrameOutcome::status_before
 
   bool published() const
   {

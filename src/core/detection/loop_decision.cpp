@@ -58,6 +58,7 @@ DecisionOptions DecisionOptions::from(const Config& config)
   o.consistency_tolerance = config.consistency_tolerance;
   o.max_pace = config.max_pace;
   o.verified_min_uniqueness = config.verified_min_uniqueness;
+  o.run_start_tolerance = config.run_start_tolerance;
   return o;
 }
 
@@ -184,6 +185,7 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
 
 FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck& geometry)
 {
+  joined_before_ = 0;
   FrameStatus status = FrameStatus::Published;
   if (!detection.has_candidates)
     status = detection.excluded ? FrameStatus::Excluded : FrameStatus::TooEarly;
@@ -221,8 +223,33 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
   previous_match_ = detection.best.id;
   previous_direction_ = detection.best.direction;
   previous_session_ = detection.best.session;
+  const bool was_published = published_ && run_ > 1;
   published_ = run_ >= options_.consistent_frames && recentFramesFollowOneLine();
+  if (published_ && !was_published)
+    joined_before_ = runStartOnLine();
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
+}
+
+size_t LoopDecision::runStartOnLine() const
+{
+  // The frames a run needs before it is consistent were right where the run is right: its matches were on the
+  // line already. Published after the fact (a backend takes a loop closure with its own stamp), they are most of
+  // what a short revisit has (Gardens Point day_right then night_right, default.yaml: recall 0.765 -> 0.815; a
+  // 60-frame route ...). Held to a tighter line than the consistency rule: at the start of a revisit, and where the
+  // pace changes, the sequence lags the true place by a few places before its matches settle on the line (with
+  // consistency_tolerance 2 instead of 1: +27 wrong loops on the pace streams, doc/results.md).
+  if (options_.run_start_tolerance < 0 || recent_.size() < 2)
+    return 0;
+  const double first = static_cast<double>(recent_.front()), last = static_cast<double>(recent_.back());
+  const double frames = static_cast<double>(recent_.size() - 1);
+  size_t joined = 0;
+  for (size_t k = recent_.size() - 1; k-- > 0; ++joined)
+  {
+    const double expected = first + (last - first) * static_cast<double>(k) / frames;
+    if (std::fabs(static_cast<double>(recent_[k]) - expected) > options_.run_start_tolerance)
+      break;
+  }
+  return joined;
 }
 
 }  // namespace openable

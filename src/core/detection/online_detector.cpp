@@ -314,7 +314,10 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
     features_.insert(std::move(*query));  // every stored frame keeps its features: later frames may close a loop with it
   outcome.times.verify_ms = millisecondsSince(start);
   outcome.frame = frames_;
-  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome);
+  // A run's first frames join its loop closure after the fact, unless verification must accept each loop (it did
+  // not run on them).
+  const bool veto = options_.verify && (config_.verification_veto || options_.verify_required);
+  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome, veto ? 0 : decision_.joinedBefore());
   has_last_stored_ = true;
   last_stored_ = descriptor;
   last_outcome_ = outcome;
