@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <random>
+#include <vector>
 
 #include "openable/detection/loop_decision.h"
 
@@ -100,6 +101,39 @@ TEST(LoopDecision, ReverseRevisitsAdvanceBackwards)
   EXPECT_EQ(decision.decide(candidate(49, 0.3f, 100, 0.2f, 1)), FrameStatus::Inconsistent);  // direction changed
 }
 
+TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
+{
+  Config c = decisionConfig();
+  c.consistent_frames = 5;
+  c.consistency_tolerance = 2;
+  c.max_pace = 3;
+  c.run_start_tolerance = 1;
+  LoopDecision decision(c);
+  for (uint64_t m : {10, 11, 12, 13})
+  {
+    EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
+    EXPECT_EQ(decision.joinedBefore(), 0u);
+  }
+  EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
+  EXPECT_EQ(decision.joinedBefore(), 4u);  // every earlier frame: on the line
+  EXPECT_EQ(decision.decide(candidate(15, 0.3f)), FrameStatus::Published);
+  EXPECT_EQ(decision.joinedBefore(), 0u);  // only where the run becomes consistent
+
+  // The sequence lagged at the start: 13 is 2 places off the line 10 -> 14, within the consistency rule's 2 but
+  // not the 1 of the frames published after the fact; counted back from the published frame, it stops there.
+  decision.reset();
+  for (uint64_t m : {10, 13, 12, 13})
+    EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
+  EXPECT_EQ(decision.joinedBefore(), 2u);  // 12 and 13
+
+  c.run_start_tolerance = -1;  // off
+  LoopDecision off(c);
+  for (uint64_t m : {10, 11, 12, 13, 14})
+    off.decide(candidate(m, 0.3f));
+  EXPECT_EQ(off.joinedBefore(), 0u);
+}
+
 TEST(LoopDecision, ScoreIsTheUniquenessAndZeroWhileTooEarly)
 {
   const LoopDecision decision(decisionConfig());
@@ -122,6 +156,7 @@ void expectNaiveReference(bool geometry)
     c.consistent_frames = 1 + trial % 5;
     c.consistency_tolerance = trial % 3;
     c.verified_min_uniqueness = geometry ? 0.05 : -1.0;
+    c.run_start_tolerance = trial % 3 - 1;
     LoopDecision decision(c);
     std::vector<Detection> seen;
     std::vector<bool> verified;
@@ -142,16 +177,19 @@ void expectNaiveReference(bool geometry)
         return uniqueness >= c.min_uniqueness || (geometry && uniqueness >= c.verified_min_uniqueness && verified[k]);
       };
       FrameStatus expected = FrameStatus::NotUnique;
+      size_t joined = 0;
       if (passes(seen.size() - 1))
       {
         // Runs restart where a step or the span from the run's start breaks: replay from the start.
         int run = 0;
         uint64_t start = 0, previous = 0;
+        std::vector<double> matches;  // the run's
         for (size_t k = 0; k < seen.size(); ++k)
         {
           if (!passes(k))
           {
             run = 0;
+            matches.clear();
             continue;
           }
           const long id = static_cast<long>(seen[k].best.id);
@@ -163,15 +201,29 @@ void expectNaiveReference(bool geometry)
           {
             run = 1;
             start = seen[k].best.id;
+            matches.clear();
           }
           previous = seen[k].best.id;
+          matches.push_back(static_cast<double>(previous));
         }
         expected = run >= c.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;
+        // The frame that publishes the run (at this pace, its consistent_frames-th): the run's earlier frames within
+        // run_start_tolerance of the line through its first and last match join it, counted back to the first
+        // that is not.
+        if (run == c.consistent_frames && c.run_start_tolerance >= 0 && run > 1)
+          for (size_t k = matches.size() - 1; k-- > 0; ++joined)
+          {
+            const double line = matches.front() + (matches.back() - matches.front()) * static_cast<double>(k) /
+                                                      static_cast<double>(matches.size() - 1);
+            if (std::fabs(matches[k] - line) > c.run_start_tolerance)
+              break;
+          }
       }
       const bool answer = verified.back();
       const LoopDecision::GeometryCheck check = [answer] { return answer; };
       ASSERT_EQ(decision.decide(seen.back(), geometry ? check : LoopDecision::GeometryCheck()), expected)
           << "trial " << trial << " frame " << t;
+      ASSERT_EQ(decision.joinedBefore(), joined) << "trial " << trial << " frame " << t;
     }
   }
 }

@@ -302,7 +302,10 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.status = decision_.decide(outcome.detection,
                                     options_.verify ? LoopDecision::GeometryCheck(verifyOnce) : nullptr);
   outcome.score = decision_.score(outcome.detection);
-  if (options_.verify && outcome.published())
+  // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
+  // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
+  const bool may_join = outcome.status == FrameStatus::Inconsistent && config_.run_start_tolerance >= 0;
+  if (options_.verify && (outcome.published() || may_join))
   {
     verifyOnce();
     if (!outcome.verification_ran && options_.verify_required)  // nothing through that it could not check
@@ -314,10 +317,7 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
     features_.insert(std::move(*query));  // every stored frame keeps its features: later frames may close a loop with it
   outcome.times.verify_ms = millisecondsSince(start);
   outcome.frame = frames_;
-  // A run's first frames join its loop closure after the fact, unless verification must accept each loop (it did
-  // not run on them).
-  const bool veto = options_.verify && (config_.verification_veto || options_.verify_required);
-  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome, veto ? 0 : decision_.joinedBefore());
+  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome, decision_.joinedBefore());
   has_last_stored_ = true;
   last_stored_ = descriptor;
   last_outcome_ = outcome;
