@@ -233,11 +233,12 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
 size_t LoopDecision::runStartOnLine() const
 {
   // The frames a run needs before it is consistent were right where the run is right: its matches were on the
-  // line already. Published after the fact (a backend takes a loop closure with its own stamp), they are most of
-  // what a short revisit has (Gardens Point day_right then night_right, default.yaml: recall 0.765 -> 0.815; a
-  // 60-frame route ...). Held to a tighter line than the consistency rule: at the start of a revisit, and where the
-  // pace changes, the sequence lags the true place by a few places before its matches settle on the line (with
-  // consistency_tolerance 2 instead of 1: +27 wrong loops on the pace streams, doc/results.md).
+  // line already. Published after the fact (a backend takes a loop closure with its own stamp), they were a run's
+  // first consistent_frames - 1 lost frames (Gardens Point day_right then night_right, default.yaml: recall
+  // 0.765 -> 0.815). Held to a tighter line than the consistency rule: at the start of a revisit, and where the
+  // pace changes, the sequence lags the true place by a few places before its matches settle on the line (every
+  // frame of the run, with no line of its own: 30 more wrong loops on 90 pace streams than within 1 place;
+  // doc/results.md).
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return 0;
   const double first = static_cast<double>(recent_.front()), last = static_cast<double>(recent_.back());
