@@ -98,8 +98,9 @@ struct Config
   int consistency_tolerance = 2;   ///< frames a match may deviate from advancing one place per frame
   double continue_uniqueness = 0.03;  ///< a published run goes on through frames this unique (below
                                       ///< min_uniqueness) whose matches keep to its line (>= min_uniqueness: off)
-  /// Once a run is consistent, its earlier frames whose matches lie within this many places of its line are
-  /// published too, late, with their own stamps (-1 = off: a run's first consistent_frames - 1 frames are lost).
+  /// Once a run is consistent, the frames before it (its first frames, and not-unique ones before them) whose
+  /// matches lie within this many places of its line, extended back, are published too, late, with their own
+  /// stamps (-1 = off: a run's first consistent_frames - 1 frames are lost).
   int run_start_tolerance = 1;
   int confirm_frames = 3;  ///< a loop closure is published once this many more stored frames go on with its run
                            ///< (0 = at once; LoopConfirmation)

@@ -172,8 +172,9 @@ const std::vector<KeyAccess>& table()
               "(below min_uniqueness) while their matches keep to its line (>= min_uniqueness = off)",
               &Config::continue_uniqueness).range(0, 1).live(),
       makeKey("run_start_tolerance",
-              "loop-closure decision: once a run is consistent, its earlier frames whose matches lie within this many "
-              "places of its line are published too, late, with their own stamps (-1 = off)",
+              "loop-closure decision: once a run is consistent, the frames before it (its first frames, and not-unique "
+              "ones before them) whose matches lie within this many places of its line, extended back, are published "
+              "too, late, with their own stamps (-1 = off)",
               &Config::run_start_tolerance).range(-1, 1000).minusOneIsOff().live(),
       makeKey("confirm_frames",
               "loop-closure decision: a loop closure is published once this many more stored frames go on with its "

@@ -127,6 +127,22 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
   EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
   EXPECT_EQ(decision.joinedBefore(), 2u);  // 12 and 13
 
+  // Before the run, frames not unique enough to start it, on its line extended back: they join it too, back to the
+  // first that is off the line (4: the line says 6) or was decided otherwise.
+  decision.reset();
+  for (uint64_t m : {20, 4, 7, 8, 9})
+  {
+    EXPECT_EQ(decision.decide(candidate(m, 0.01f)), FrameStatus::NotUnique);
+    EXPECT_TRUE(decision.mayJoinLater());
+  }
+  for (uint64_t m : {10, 11, 12, 13})
+    EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
+  EXPECT_FALSE(decision.mayJoinLater());
+  EXPECT_EQ(decision.joinedBefore(), 7u);  // 13, 12, 11, 10, then 9, 8, 7
+  EXPECT_EQ(decision.decide(Detection()), FrameStatus::TooEarly);
+  EXPECT_FALSE(decision.mayJoinLater());  // no best match
+
   c.run_start_tolerance = -1;  // off
   LoopDecision off(c);
   for (uint64_t m : {10, 11, 12, 13, 14})
@@ -160,6 +176,7 @@ void expectNaiveReference(bool geometry)
     LoopDecision decision(c);
     std::vector<Detection> seen;
     std::vector<bool> verified;
+    std::vector<FrameStatus> statuses;  // what each earlier frame was decided
     uint64_t match = 100;
     for (int t = 0; t < 200; ++t)
     {
@@ -207,23 +224,27 @@ void expectNaiveReference(bool geometry)
           matches.push_back(static_cast<double>(previous));
         }
         expected = run >= c.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;
-        // The frame that publishes the run (at this pace, its consistent_frames-th): the run's earlier frames within
-        // run_start_tolerance of the line through its first and last match join it, counted back to the first
-        // that is not.
+        // The frame that publishes the run (at this pace, its consistent_frames-th): the frames before it that were
+        // not published (every frame here has candidates) within run_start_tolerance of the line through the run's
+        // first and last match, extended back, join it, counted back to the first that is not.
         if (run == c.consistent_frames && c.run_start_tolerance >= 0 && run > 1)
-          for (size_t k = matches.size() - 1; k-- > 0; ++joined)
+        {
+          const double slope = (matches.back() - matches.front()) / static_cast<double>(matches.size() - 1);
+          for (size_t k = statuses.size(); k-- > 0 && joined < LoopDecision::kMaxJoined; ++joined)
           {
-            const double line = matches.front() + (matches.back() - matches.front()) * static_cast<double>(k) /
-                                                      static_cast<double>(matches.size() - 1);
-            if (std::fabs(matches[k] - line) > c.run_start_tolerance)
+            const double line = matches.back() - slope * static_cast<double>(statuses.size() - k);
+            if (statuses[k] == FrameStatus::Published || std::fabs(double(seen[k].best.id) - line) > c.run_start_tolerance)
               break;
           }
+        }
       }
       const bool answer = verified.back();
       const LoopDecision::GeometryCheck check = [answer] { return answer; };
       ASSERT_EQ(decision.decide(seen.back(), geometry ? check : LoopDecision::GeometryCheck()), expected)
           << "trial " << trial << " frame " << t;
       ASSERT_EQ(decision.joinedBefore(), joined) << "trial " << trial << " frame " << t;
+      ASSERT_TRUE(decision.mayJoinLater() == (expected != FrameStatus::Published)) << "trial " << trial << " frame " << t;
+      statuses.push_back(expected);
     }
   }
 }

@@ -24,9 +24,10 @@ namespace openable
 /// A frame standing still repeats the last stored frame's decision: while that one is pending, the repeats
 /// wait with it (up to kMaxRepeats) and are confirmed or dropped with it.
 ///
-/// A run's first frames (LoopDecision::joinedBefore): the frames decided Inconsistent just before a published one
-/// are held (with their repeats) until the next stored frame; the ones the decision says join the run's loop wait
-/// with it and are confirmed with it, each with status_before Inconsistent (or Standstill, a repeat).
+/// A run's first frames and the frames before it (LoopDecision::joinedBefore): the frames that may join a run
+/// (LoopDecision::mayJoinLater) just before a published one are held with their repeats; the ones the decision
+/// says join the run's loop closure wait with it and are confirmed with it, each with status_before its own
+/// status (Inconsistent, NotUnique, or Standstill for a repeat).
 ///
 /// Outcome: what a pipeline decides for one frame, with a FrameStatus `status` and `published()`
 /// (FrameOutcome in OnlineDetector and the map replay, MergedOutcome in the place servers' CandidateMerger).
@@ -44,17 +45,18 @@ public:
   }
 
   /// A stored frame, after the decision and verification. A Published outcome becomes Pending (frames > 0);
-  /// `joined_before` of the Inconsistent frames just before it (LoopDecision::joinedBefore) join it. Returns the
-  /// earlier outcomes it confirms, oldest first, each Published (frames 0: the frames that joined it); when the
-  /// frame is not Published itself, the run ended and every pending one is dropped.
-  std::vector<Outcome> stored(Outcome& outcome, size_t joined_before = 0)
+  /// `joined_before` of the held frames just before it (LoopDecision::joinedBefore) join it. Returns the earlier
+  /// outcomes it confirms, oldest first, each Published (frames 0: the frames that joined it); when the frame is
+  /// not Published itself, the run ended and every pending one is dropped, and it is held when it `may_join` a
+  /// later run (LoopDecision::mayJoinLater, and whatever else the caller requires of it).
+  std::vector<Outcome> stored(Outcome& outcome, size_t joined_before = 0, bool may_join = false)
   {
     std::vector<Outcome> confirmed;
     if (!outcome.published())
     {
       dropped_ += pending() - joinedPending();  // the run ended (or never was): what waited for it is not confirmed
       waiting_.clear();
-      holdRunStart(outcome);
+      hold(outcome, may_join);
       return confirmed;
     }
     for (Waiting& w : waiting_)
@@ -126,9 +128,8 @@ public:
     return count;
   }
 
-  /// Inconsistent frames held for a run that may still become consistent: at most this many (a run longer than
-  /// that before it is consistent keeps only its last ones; LoopDecision looks back consistent_frames at most).
-  static constexpr size_t kMaxHeld = 1000;
+  /// Frames held for a run that may still become consistent: at most as many as a run reaches back.
+  static constexpr size_t kMaxHeld = LoopDecision::kMaxJoined;
 
 private:
   struct Waiting
@@ -147,10 +148,10 @@ private:
       confirmed.push_back(std::move(o));
     }
   }
-  /// An Inconsistent frame may be one of a run's first frames: held until the next stored frame.
-  void holdRunStart(const Outcome& outcome)
+  /// A frame that may join a later run is held; any other ends what was held.
+  void hold(const Outcome& outcome, bool may_join)
   {
-    if (outcome.status != FrameStatus::Inconsistent)
+    if (!may_join)
     {
       held_.clear();
       return;
@@ -170,7 +171,7 @@ private:
   int frames_ = 0;
   uint64_t dropped_ = 0;
   std::deque<Waiting> waiting_;
-  std::deque<Waiting> held_;  ///< the Inconsistent frames just before the next stored one, oldest first
+  std::deque<Waiting> held_;  ///< the frames that may join a run, just before the next stored one, oldest first
 };
 
 using LoopConfirmation = BasicLoopConfirmation<FrameOutcome>;

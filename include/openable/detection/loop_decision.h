@@ -79,14 +79,24 @@ public:
   /// minimum of places, but is at least verified_min_uniqueness unique and within the distance gate, joins the
   /// run when geometry confirms its best match: published once the run is consistent, as any other.
   FrameStatus decide(const Detection& detection, const GeometryCheck& geometry = GeometryCheck());
-  /// After a Published decision: how many of the stored frames just before this one (its run's first frames,
-  /// decided Inconsistent while the run was too short) join its loop closure now, published after the fact. Not 0
-  /// only where the run becomes consistent: those frames whose matches lie within run_start_tolerance of the run's
-  /// line, counted back from this frame up to the first that does not. 0 after any other decision.
+  /// After a Published decision: how many of the stored frames just before this one join its loop closure now,
+  /// published after the fact. Not 0 only where the run becomes consistent: counted back from this frame, the
+  /// frames that may join (mayJoinLater: the run's first frames, and before them frames not unique enough) whose
+  /// matches lie within run_start_tolerance of the run's line, up to the first that does not (at most kMaxJoined).
+  /// 0 after any other decision.
   size_t joinedBefore() const
   {
     return joined_before_;
   }
+  /// Whether the last decided frame may join a run published later: it was Inconsistent (one of a run's first
+  /// frames), or NotUnique with a best match (a revisit whose evidence was still too weak). A caller holds such
+  /// frames (LoopConfirmation) until joinedBefore() says which join.
+  bool mayJoinLater() const
+  {
+    return !past_.empty() && past_.back().may_join;
+  }
+  /// The most frames a run reaches back (joinedBefore).
+  static constexpr size_t kMaxJoined = 256;
   /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
   /// candidates, or fewer than min_candidates: a lone candidate has no rival and would score 1).
   float score(const Detection& detection) const;
@@ -94,7 +104,7 @@ public:
   /// Takes new values of the decision keys (threshold, min_uniqueness, min_candidates, consistent_frames,
   /// consistency_tolerance); the consistency run restarts.
   void setOptions(const DecisionOptions& options);
-  /// Forgets the consistency run (a new stream, or a gap in it).
+  /// Forgets the consistency run and the frames decided so far (a new stream, or a gap in it).
   void reset();
 
 private:
@@ -108,8 +118,12 @@ private:
   FrameStatus joinRun(const Detection& detection);
   bool advancesWithRun(const Detection& detection) const;
   bool recentFramesFollowOneLine() const;
-  /// The run's frames before this one whose matches lie within run_start_tolerance of its line (joinedBefore).
-  size_t runStartOnLine() const;
+  FrameStatus decideFrame(const Detection& detection, const GeometryCheck& geometry);
+  /// Forgets the consistency run (a frame that failed); the frames decided before it stay (a run may reach back).
+  void endRun();
+  /// The frames before this one that may join, with matches within run_start_tolerance of the run's line
+  /// (joinedBefore).
+  size_t framesOnLineBefore() const;
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
 
@@ -123,6 +137,15 @@ private:
   uint32_t previous_session_ = 0;
   std::deque<uint64_t> recent_;  ///< the run's last consistent_frames matches
   size_t joined_before_ = 0;     ///< joinedBefore() of the last decision
+  /// Each decided frame's best match, for a run that reaches back; the last kMaxJoined + 1, oldest first.
+  struct Past
+  {
+    uint64_t id;
+    int direction;
+    uint32_t session;
+    bool may_join;
+  };
+  std::deque<Past> past_;
 };
 
 }  // namespace openable

@@ -74,6 +74,12 @@ void LoopDecision::setOptions(const DecisionOptions& options)
 
 void LoopDecision::reset()
 {
+  endRun();
+  past_.clear();
+}
+
+void LoopDecision::endRun()
+{
   run_ = 0;
   published_ = false;
   recent_.clear();
@@ -186,6 +192,16 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
 FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck& geometry)
 {
   joined_before_ = 0;
+  const FrameStatus status = decideFrame(detection, geometry);
+  const bool may_join = status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
+  past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join});
+  if (past_.size() > kMaxJoined + 1)
+    past_.pop_front();
+  return status;
+}
+
+FrameStatus LoopDecision::decideFrame(const Detection& detection, const GeometryCheck& geometry)
+{
   FrameStatus status = FrameStatus::Published;
   if (!detection.has_candidates)
     status = detection.excluded ? FrameStatus::Excluded : FrameStatus::TooEarly;
@@ -203,7 +219,7 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
     unique_distance_ = detection.best.distance;
     return joinRun(detection);
   }
-  reset();
+  endRun();
   return status;
 }
 
@@ -226,28 +242,29 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
   const bool was_published = published_ && run_ > 1;
   published_ = run_ >= options_.consistent_frames && recentFramesFollowOneLine();
   if (published_ && !was_published)
-    joined_before_ = runStartOnLine();
+    joined_before_ = framesOnLineBefore();
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
 }
 
-size_t LoopDecision::runStartOnLine() const
+size_t LoopDecision::framesOnLineBefore() const
 {
   // The frames a run needs before it is consistent were right where the run is right: its matches were on the
-  // line already. Published after the fact (a backend takes a loop closure with its own stamp), they were a run's
-  // first consistent_frames - 1 lost frames (Gardens Point day_right then night_right, default.yaml: recall
-  // 0.765 -> 0.815). Held to a tighter line than the consistency rule: at the start of a revisit, and where the
-  // pace changes, the sequence lags the true place by a few places before its matches settle on the line (every
-  // frame of the run, with no line of its own: 30 more wrong loops on 90 pace streams than within 1 place;
-  // doc/results.md).
+  // line already, and often so were the frames before it that were not unique enough to start it (the revisit
+  // had begun, its evidence had not). Published after the fact (a backend takes a loop closure with its own
+  // stamp): Gardens Point day_right then night_right, default.yaml, recall 0.765 -> 0.87, day_right then day_left
+  // 0.335 -> 0.58 (doc/results.md). Held to a tighter line than the consistency rule: at the start of a revisit,
+  // and where the pace changes, the sequence lags the true place by a few places before its matches settle on
+  // the line (the run's frames with no line of their own: 30 more wrong loops on 90 pace streams).
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return 0;
-  const double first = static_cast<double>(recent_.front()), last = static_cast<double>(recent_.back());
-  const double frames = static_cast<double>(recent_.size() - 1);
+  const double last = static_cast<double>(recent_.back());
+  const double slope = (last - static_cast<double>(recent_.front())) / static_cast<double>(recent_.size() - 1);
   size_t joined = 0;
-  for (size_t k = recent_.size() - 1; k-- > 0; ++joined)
+  for (auto p = past_.rbegin(); p != past_.rend() && joined < kMaxJoined; ++p, ++joined)
   {
-    const double expected = first + (last - first) * static_cast<double>(k) / frames;
-    if (std::fabs(static_cast<double>(recent_[k]) - expected) > options_.run_start_tolerance)
+    const double expected = last - slope * static_cast<double>(joined + 1);
+    if (!p->may_join || p->direction != previous_direction_ || p->session != previous_session_ ||
+        std::fabs(static_cast<double>(p->id) - expected) > options_.run_start_tolerance)
       break;
   }
   return joined;

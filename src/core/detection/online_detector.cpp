@@ -304,8 +304,8 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.score = decision_.score(outcome.detection);
   // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
   // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
-  const bool may_join = outcome.status == FrameStatus::Inconsistent && config_.run_start_tolerance >= 0;
-  if (options_.verify && (outcome.published() || may_join))
+  const bool run_start = outcome.status == FrameStatus::Inconsistent && config_.run_start_tolerance >= 0;
+  if (options_.verify && (outcome.published() || run_start))
   {
     verifyOnce();
     if (!outcome.verification_ran && options_.verify_required)  // nothing through that it could not check
@@ -317,7 +317,12 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
     features_.insert(std::move(*query));  // every stored frame keeps its features: later frames may close a loop with it
   outcome.times.verify_ms = millisecondsSince(start);
   outcome.frame = frames_;
-  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome, decision_.joinedBefore());
+  // A frame that may join a later run: as the decision says, unless verification must accept every loop closure
+  // and did not check it (not-unique frames are not verified: that would be every frame).
+  const bool strict = options_.verify && (config_.verification_veto || options_.verify_required);
+  const bool may_join = decision_.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent ||
+                                                     (outcome.status == FrameStatus::NotUnique && !strict));
+  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome, decision_.joinedBefore(), may_join);
   has_last_stored_ = true;
   last_stored_ = descriptor;
   last_outcome_ = outcome;

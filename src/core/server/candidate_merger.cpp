@@ -95,7 +95,7 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
   StreamDecision& stream = found->second;
   out.status = stream.decision.decide(d);
   out.score = stream.decision.score(d);
-  out.confirmed = stream.confirmation.stored(out, stream.decision.joinedBefore());
+  out.confirmed = stream.confirmation.stored(out, stream.decision.joinedBefore(), stream.decision.mayJoinLater());
   return out;
 }
 
