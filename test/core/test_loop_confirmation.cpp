@@ -101,8 +101,8 @@ std::vector<FrameStatus> reference(const std::vector<Step>& steps, int frames, c
     fate = out[i] = confirmed && later == frames ? FrameStatus::Published : FrameStatus::Unconfirmed;
     // The held frames just before it that join it: published with it, or left Inconsistent.
     size_t joined = 0;
-    for (size_t j = i; j-- > 0 && joined < (i < joins.size() ? joins[i] : 0) && steps[j] != Step::Passed &&
-                       steps[j] != Step::Failed;)
+    for (size_t j = i;
+         j-- > 0 && joined < (i < joins.size() ? joins[i] : 0) && steps[j] != Step::Passed && steps[j] != Step::Failed;)
     {
       if (steps[j] != Step::Held)
         continue;

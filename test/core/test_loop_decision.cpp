@@ -233,7 +233,8 @@ void expectNaiveReference(bool geometry)
           for (size_t k = statuses.size(); k-- > 0 && joined < LoopDecision::kMaxJoined; ++joined)
           {
             const double line = matches.back() - slope * static_cast<double>(statuses.size() - k);
-            if (statuses[k] == FrameStatus::Published || std::fabs(double(seen[k].best.id) - line) > c.run_start_tolerance)
+            if (statuses[k] == FrameStatus::Published ||
+                std::fabs(double(seen[k].best.id) - line) > c.run_start_tolerance)
               break;
           }
         }
@@ -243,7 +244,8 @@ void expectNaiveReference(bool geometry)
       ASSERT_EQ(decision.decide(seen.back(), geometry ? check : LoopDecision::GeometryCheck()), expected)
           << "trial " << trial << " frame " << t;
       ASSERT_EQ(decision.joinedBefore(), joined) << "trial " << trial << " frame " << t;
-      ASSERT_TRUE(decision.mayJoinLater() == (expected != FrameStatus::Published)) << "trial " << trial << " frame " << t;
+      ASSERT_TRUE(decision.mayJoinLater() == (expected != FrameStatus::Published))
+          << "trial " << trial << " frame " << t;
       statuses.push_back(expected);
     }
   }

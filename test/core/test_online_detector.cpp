@@ -110,7 +110,8 @@ TEST(OnlineDetector, GardensPointConfigurationPublishesTrustworthyLoopsDayThenNi
 // Verification that adds recall (verified_min_uniqueness, verification_veto false): where it can confirm a
 // place (the same daylight from the other side of the path) a verified frame passes with less uniqueness; where it
 // cannot (day to night), appearance decides as without it. Measured: day_left -> day_right recall 0.645 -> 0.705,
-// day_right -> night_right 0.870 both, 0 wrong either way (before runs reached back: 0.480 -> 0.600 and 0.765). Gardens Point has no calibration: the assumed pinhole.
+// day_right -> night_right 0.870 both, 0 wrong either way (before runs reached back: 0.480 -> 0.600 and 0.765).
+// Gardens Point has no calibration: the assumed pinhole.
 TEST(OnlineDetector, VerificationAddsRecallWhereItCanConfirmAndNoWrongLoop)
 {
   const PinholeCamera camera =
@@ -120,8 +121,8 @@ TEST(OnlineDetector, VerificationAddsRecallWhereItCanConfirmAndNoWrongLoop)
   OnlineOptions verifying;
   verifying.verify = true;
   verifying.verify_required = false;  // appearance decides what verification cannot check (veto false)
-  for (const auto& [first, second, gain] : {std::tuple<const char*, const char*, double>{"day_left", "day_right", 0.05},
-                                            {"day_right", "night_right", 0.0}})
+  for (const auto& [first, second, gain] :
+       {std::tuple<const char*, const char*, double>{"day_left", "day_right", 0.05}, {"day_right", "night_right", 0.0}})
   {
     const auto& frames = gardensPointStream(first, second);
     const auto outcomes = runStream(frames, config, verifying, &camera);

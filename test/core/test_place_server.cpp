@@ -136,7 +136,8 @@ TEST(PlaceServer, OneRobotDecidesExactlyAsTheLoopDetector)
     decided.frame = t;
     decided.detection = expected;
     decided.status = decision.decide(expected);
-    const std::vector<FrameOutcome> confirmed = confirmation.stored(decided, decision.joinedBefore(), decision.mayJoinLater());
+    const std::vector<FrameOutcome> confirmed =
+        confirmation.stored(decided, decision.joinedBefore(), decision.mayJoinLater());
     const MergedOutcome got = merger.merge({server.process(input("walker", t, info.stamp, stream[t], config))});
     ASSERT_EQ(toString(got.status), std::string(toString(decided.status))) << t << " " << describe(got);
     ASSERT_EQ(got.confirmed.size(), confirmed.size()) << t;

@@ -59,7 +59,7 @@ struct DecisionOptions
   int consistency_tolerance;    ///< places a match may be off the run's line
   int max_pace;                 ///< a run advances from 1 / max_pace to max_pace places per frame
   double verified_min_uniqueness;  ///< geometry stands in for min_uniqueness down to this uniqueness (-1: off)
-  int run_start_tolerance;         ///< a run's earlier frames within this of its line join it when it is published (-1: off)
+  int run_start_tolerance;         ///< frames before a run within this of its line join it once published (-1: off)
 
   static DecisionOptions from(const Config& config);
 };

@@ -193,7 +193,8 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
 {
   joined_before_ = 0;
   const FrameStatus status = decideFrame(detection, geometry);
-  const bool may_join = status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
+  const bool may_join =
+      status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
   past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join});
   if (past_.size() > kMaxJoined + 1)
     past_.pop_front();

@@ -27,7 +27,8 @@ std::vector<MapLoop> replayLoops(const SessionMap& map, const Config& config)
       outcome.detection = detector.process(query, frames.info(p));
       outcome.status = decision.decide(outcome.detection);
       outcome.score = decision.score(outcome.detection);
-      std::vector<FrameOutcome> published = confirmation.stored(outcome, decision.joinedBefore(), decision.mayJoinLater());
+      std::vector<FrameOutcome> published =
+          confirmation.stored(outcome, decision.joinedBefore(), decision.mayJoinLater());
       if (outcome.published())  // confirm_frames 0
         published.push_back(outcome);
       for (const FrameOutcome& o : published)
