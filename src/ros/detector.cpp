@@ -293,8 +293,8 @@ void Detector::publish(const std_msgs::Header& header, const openable::FrameOutc
   if (outcome.published())
     publishLoop(msg, outcome, outcome);
   // Loop closures of earlier frames that this one confirmed (confirm_frames): each with its own frame's stamp.
-  // Their frames were counted pending (or inconsistent: a run's first frames); they count as decided now, as
-  // decisions.csv has them in the end.
+  // Their frames were counted pending (or, for the frames a run reached back to, as their status_before); they
+  // count as decided now, as decisions.csv has them in the end.
   for (const openable::FrameOutcome& earlier : outcome.confirmed)
   {
     std_msgs::Header earlier_header = header;
