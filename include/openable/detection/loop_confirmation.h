@@ -54,7 +54,7 @@ public:
     std::vector<Outcome> confirmed;
     if (!outcome.published())
     {
-      dropped_ += pending() - joinedPending();  // the run ended (or never was): what waited for it is not confirmed
+      dropped_ += pendingOwn();  // the run ended (or never was): what waited for it is not confirmed
       waiting_.clear();
       hold(outcome, may_join);
       return confirmed;
@@ -136,7 +136,7 @@ private:
   {
     std::vector<Outcome> outcomes;  ///< the stored frame, then its repeats
     int confirmations = 0;          ///< stored frames since it that went on with its run
-    bool joined = true;             ///< one of a run's first frames (not Pending, not counted as dropped)
+    bool joined = false;            ///< a frame the run reached back to (not Pending, not counted as dropped)
   };
 
   void confirm(Waiting& w, std::vector<Outcome>& confirmed)
@@ -160,11 +160,12 @@ private:
     if (held_.size() > kMaxHeld)
       held_.pop_front();
   }
-  size_t joinedPending() const
+  /// Outcomes waiting that were Pending themselves (not frames the run reached back to), repeats included.
+  size_t pendingOwn() const
   {
     size_t count = 0;
     for (const Waiting& w : waiting_)
-      count += w.joined ? w.outcomes.size() : 0;
+      count += w.joined ? 0 : w.outcomes.size();
     return count;
   }
 
