@@ -74,6 +74,8 @@ struct Config
   // Matching.
   int sequence_length = 30;     ///< L: a place is the sequence of the last L frames
   int min_sequence_length = 1;  ///< sequences with fewer frames are not candidates (0 = only full, L, sequences)
+  /// Loop-closure mode: sequences of fewer frames (at most L) are not candidates (0 = only full sequences of L).
+  int min_loop_sequence_length = 21;
   double threshold = -1.0;      ///< accept a loop when the normalised distance is <= threshold; -1 = no gate
   int exclusion_window = 50;    ///< loop-closure mode: the last N frames before the current one are never matched
   int top_k = 5;                ///< candidates reported per frame
@@ -92,7 +94,7 @@ struct Config
                                      ///< standing still: not stored, not matched (0 = off)
 
   // Loop-closure decision (OnlineDetector): what must hold, besides the gates above, before a loop is published.
-  int min_candidates = 30;         ///< fewer full-sequence candidate places: "too early" (uniqueness needs rivals)
+  int min_candidates = 21;         ///< fewer candidate places: "too early" (2 x uniqueness_window + 1: a rival)
   int consistent_frames = 10;      ///< this many consecutive frames must pass the gates with matches advancing
                                    ///< together (1 = off)
   int consistency_tolerance = 2;   ///< frames a match may deviate from advancing one place per frame

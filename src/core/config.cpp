@@ -248,6 +248,7 @@ Config Config::paper()
   c.standstill_distance = 0.0;
   c.consistent_frames = 4;
   c.min_candidates = 60;
+  c.min_loop_sequence_length = 0;
   c.continue_uniqueness = 1.0;
   c.confirm_frames = 0;
   c.run_start_tolerance = -1;

@@ -129,6 +129,10 @@ const std::vector<KeyAccess>& table()
               "sequences of fewer frames are never candidates; 0 = only full sequences of "
               "sequence_length frames (1 = any, the mean of the available terms)",
               &Config::min_sequence_length).range(0, 10000).live(),
+      makeKey("min_loop_sequence_length",
+              "loop-closure mode: sequences of fewer frames (at most sequence_length) are never candidates; "
+              "0 = only full sequences of sequence_length frames",
+              &Config::min_loop_sequence_length).range(0, 10000).live(),
       makeKey("threshold", "accept when normalised distance <= threshold (0..1); -1 = no distance gate",
               &Config::threshold).range(-1, 1).minusOneIsOff().live(),
       makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
@@ -158,7 +162,8 @@ const std::vector<KeyAccess>& table()
               "not stored, not matched, it repeats the last decision (0 = off)",
               &Config::standstill_distance).range(0, 1).live(),
       makeKey("min_candidates",
-              "loop-closure decision: fewer full-sequence candidate places than this is 'too early' (frames)",
+              "loop-closure decision: fewer candidate places than this is 'too early' (21 = 2 x uniqueness_window + 1: "
+              "a best match always has a rival)",
               &Config::min_candidates).range(0, 100000000).live(),
       makeKey("consistent_frames",
               "loop-closure decision: consecutive frames that must pass the gates with matches advancing "

@@ -18,7 +18,7 @@ enum class FrameStatus
   NotKeyframe,         ///< not stored: the camera has not moved enough since the last keyframe
   Standstill,          ///< not stored: the image is the last stored one again (the camera stands still)
   TimeJump,            ///< not stored: its stamp is earlier than the previous frame's
-  TooEarly,            ///< fewer than min_candidates full-sequence places to compare with
+  TooEarly,            ///< fewer than min_candidates places with a long enough sequence to compare with
   Excluded,            ///< history exists, but every frame of it is inside the exclusion (frames or seconds)
   AboveThreshold,      ///< best normalised distance > threshold
   NotUnique,           ///< uniqueness (1 - best / second best) < min_uniqueness, or no gate is set at all
@@ -54,7 +54,7 @@ struct DecisionOptions
   double threshold;             ///< -1: off
   double min_uniqueness;        ///< 0: off
   double continue_uniqueness;   ///< a published run goes on through frames at least this unique
-  int min_candidates;           ///< full-sequence places a frame must have to choose from
+  int min_candidates;           ///< candidate places a frame must have to choose from
   int consistent_frames;        ///< frames that must agree before a loop is published
   int consistency_tolerance;    ///< places a match may be off the run's line
   int max_pace;                 ///< a run advances from 1 / max_pace to max_pace places per frame
@@ -90,7 +90,7 @@ public:
   }
   /// Whether the last decided frame may join a run published later: it was Inconsistent (one of a run's first
   /// frames), or NotUnique with a best match (a revisit whose evidence was still too weak). A caller holds such
-  /// frames (LoopConfirmation) until joinedBefore() says which join.
+  /// frames (LoopConfirmation) until joinedBefore() says which join. Never with run_start_tolerance -1.
   bool mayJoinLater() const
   {
     return !past_.empty() && past_.back().may_join;

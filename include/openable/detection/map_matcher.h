@@ -49,15 +49,17 @@ bool onlyExcludedPast(const Detection& detection, size_t other_frames);
 /// `exclusion_seconds` before the query; other sessions are matched whole. The best places of all
 /// sessions compete: the second best that makes a match unique may come from any session.
 ///
-/// Sequences: in loop-closure use (`partial_sequences` false) only full sequences of L frames are
-/// candidates: the partial chains at the start of a stream compare a few frames only and were the main
-/// source of false loops (measured, doc/results.md); localisation accepts min_sequence_length terms,
-/// because there every query has a true match.
+/// Sequences: in loop-closure use (`partial_sequences` false) a sequence is a candidate once it has
+/// min_loop_sequence_length frames (21 by default, at most L): partial chains of a few frames at the start of
+/// a stream were the main source of false loops (measured, doc/results.md), while waiting for all L frames
+/// left a short route (60 places) without a loop. Localisation accepts min_sequence_length terms, because
+/// there every query has a true match.
 /// What MapMatcher reads of a Config (the keys of the same names): sequences, paces, the exclusion, top-k.
 struct MatchOptions
 {
   int sequence_length;
-  int min_sequence_length;
+  int min_sequence_length;       ///< localisation (partial_sequences): fewer frames are not candidates
+  int min_loop_sequence_length;  ///< loop-closure use: the same (0: only full sequences of L frames)
   bool bidirectional;
   int max_pace;               ///< 1: the paper's sequences (SequenceMatcher); more: PaceMatcher
   double pace_penalty;

@@ -193,8 +193,9 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
 {
   joined_before_ = 0;
   const FrameStatus status = decideFrame(detection, geometry);
-  const bool may_join =
+  const bool may_be_late =
       status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
+  const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
   past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join});
   if (past_.size() > kMaxJoined + 1)
     past_.pop_front();

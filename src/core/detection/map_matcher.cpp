@@ -19,6 +19,7 @@ MatchOptions MatchOptions::from(const Config& config)
   MatchOptions o;
   o.sequence_length = config.sequence_length;
   o.min_sequence_length = config.min_sequence_length;
+  o.min_loop_sequence_length = config.min_loop_sequence_length;
   o.bidirectional = config.bidirectional;
   o.max_pace = config.max_pace;
   o.pace_penalty = config.pace_penalty;
@@ -55,9 +56,8 @@ std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layo
 
 int MapMatcher::minTerms() const
 {
-  if (!partial_sequences_ || options_.min_sequence_length == 0)
-    return options_.sequence_length;
-  return options_.min_sequence_length;
+  const int least = partial_sequences_ ? options_.min_sequence_length : options_.min_loop_sequence_length;
+  return least == 0 ? options_.sequence_length : std::min(least, options_.sequence_length);
 }
 
 size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const

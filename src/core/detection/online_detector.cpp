@@ -304,7 +304,7 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.score = decision_.score(outcome.detection);
   // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
   // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
-  const bool run_start = outcome.status == FrameStatus::Inconsistent && config_.run_start_tolerance >= 0;
+  const bool run_start = outcome.status == FrameStatus::Inconsistent && decision_.mayJoinLater();
   if (options_.verify && (outcome.published() || run_start))
   {
     verifyOnce();
