@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "openable/description/frame_describer.h"
@@ -65,6 +66,27 @@ TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
   }
   EXPECT_GE(accepted, 16);
   EXPECT_LE(accepted, 22);
+}
+
+// min_loop_sequence_length: in loop-closure mode a sequence is a candidate once it has that many frames (at most
+// L), both for the paper's sequences and for sequences at any pace; 0 waits for all L.
+TEST(LoopDetector, LoopSequencesAreCandidatesFromMinLoopSequenceLengthFrames)
+{
+  const auto frames = revisitingStream();
+  for (int max_pace : {1, 3})
+    for (int least : {0, 1, 3, 5, 9})
+    {
+      Config c = Config::paper();
+      c.sequence_length = 5;
+      c.exclusion_window = 20;
+      c.max_pace = max_pace;
+      c.min_loop_sequence_length = least;
+      const int frames_needed = least == 0 ? 5 : std::min(least, 5);
+      LoopDetector detector(c);
+      for (int i = 0; i < 40; ++i)
+        EXPECT_EQ(detector.process(frames[i]).has_candidates, i > c.exclusion_window + frames_needed - 1)
+            << "max_pace " << max_pace << ", min_loop_sequence_length " << least << ", frame " << i;
+    }
 }
 
 TEST(LoopDetector, TopKAreDistinctPlacesBestFirst)
