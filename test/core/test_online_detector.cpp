@@ -136,8 +136,8 @@ TEST(OnlineDetector, AShortRouteGetsLoopsFromTheRevisitsFirstFrames)
   ASSERT_EQ(before.min_loop_sequence_length, 21);
   before.min_loop_sequence_length = 0;  // only full sequences of L frames
   before.min_candidates = 30;
-  for (const auto& [first, second] : {std::pair<const char*, const char*>{"day_right", "night_right"},
-                                      {"day_left", "day_right"}})
+  for (const auto& [first, second] :
+       {std::pair<const char*, const char*>{"day_right", "night_right"}, {"day_left", "day_right"}})
   {
     const auto& whole = gardensPointStream(first, second);
     std::vector<cv::Mat> frames(whole.begin(), whole.begin() + 60);
