@@ -252,6 +252,7 @@ Config Config::paper()
   c.continue_uniqueness = 1.0;
   c.confirm_frames = 0;
   c.run_start_tolerance = -1;
+  c.run_resume_frames = 0;
   c.verified_min_uniqueness = -1.0;
   return c;
 }

@@ -181,6 +181,10 @@ const std::vector<KeyAccess>& table()
               "ones before them) whose matches lie within this many places of its line, extended back, are published "
               "too, late, with their own stamps (-1 = off)",
               &Config::run_start_tolerance).range(-1, 1000).minusOneIsOff().live(),
+      makeKey("run_resume_frames",
+              "loop-closure decision: for this many frames after a published run breaks, a frame whose match lies on "
+              "its line, extended (within consistency_tolerance), at continue_uniqueness resumes it (0 = off)",
+              &Config::run_resume_frames).range(0, 100000).live(),
       makeKey("confirm_frames",
               "loop-closure decision: a loop closure is published once this many more stored frames go on with its "
               "run; it arrives that many keyframes late, with its own stamp (0 = at once)",

@@ -155,6 +155,54 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
   EXPECT_EQ(off.joinedBefore(), 0u);
 }
 
+// A published run broken by a dip of uniqueness resumes where a frame's match lies on its line, extended, at
+// continue_uniqueness (run_resume_frames); never off the line, never after run_resume_frames frames, never with 0.
+TEST(LoopDecision, ABrokenRunResumesOnItsLineWithinRunResumeFrames)
+{
+  Config c = decisionConfig();  // min_uniqueness 0.1, consistent_frames 3, consistency_tolerance 1
+  c.continue_uniqueness = 0.05;
+  c.run_start_tolerance = 1;
+  c.run_resume_frames = 4;  // a frame at most 4 frames after the line's last published one
+  const auto publishRun = [](LoopDecision& decision)
+  {
+    for (uint64_t m : {10, 11})
+      EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
+    EXPECT_EQ(decision.decide(candidate(12, 0.3f)), FrameStatus::Published);
+  };
+  LoopDecision decision(c);
+  publishRun(decision);
+  EXPECT_EQ(decision.decide(candidate(3, 0.01f)), FrameStatus::NotUnique);   // the dip: a look-alike place
+  EXPECT_EQ(decision.decide(candidate(14, 0.02f)), FrameStatus::NotUnique);  // on the line, below continue_uniqueness
+  EXPECT_EQ(decision.decide(candidate(15, 0.07f)), FrameStatus::Published);  // on the line (12 + 3), unique enough
+  EXPECT_EQ(decision.joinedBefore(), 1u);                                    // 14 joins it
+  EXPECT_EQ(decision.decide(candidate(16, 0.07f)), FrameStatus::Published);  // and the run goes on
+
+  // Off the line (the line says 15, 17 is 2 off with tolerance 1): nothing resumes; a run must start again.
+  decision.reset();
+  publishRun(decision);
+  decision.decide(candidate(3, 0.01f));
+  decision.decide(candidate(14, 0.01f));
+  EXPECT_EQ(decision.decide(candidate(17, 0.07f)), FrameStatus::NotUnique);
+
+  // The 4th frame after the line's last published one may resume it; the 5th may not.
+  decision.reset();
+  publishRun(decision);
+  for (uint64_t m : {3, 4, 5})
+    decision.decide(candidate(m, 0.01f));
+  EXPECT_EQ(decision.decide(candidate(16, 0.07f)), FrameStatus::Published);
+  decision.reset();
+  publishRun(decision);
+  for (uint64_t m : {3, 4, 5, 6})
+    decision.decide(candidate(m, 0.01f));
+  EXPECT_EQ(decision.decide(candidate(17, 0.07f)), FrameStatus::NotUnique);
+
+  c.run_resume_frames = 0;  // off
+  LoopDecision off(c);
+  publishRun(off);
+  off.decide(candidate(3, 0.01f));
+  EXPECT_EQ(off.decide(candidate(14, 0.07f)), FrameStatus::NotUnique);
+}
+
 TEST(LoopDecision, ScoreIsTheUniquenessAndZeroWhileTooEarly)
 {
   const LoopDecision decision(decisionConfig());

@@ -60,6 +60,7 @@ struct DecisionOptions
   int max_pace;                 ///< a run advances from 1 / max_pace to max_pace places per frame
   double verified_min_uniqueness;  ///< geometry stands in for min_uniqueness down to this uniqueness (-1: off)
   int run_start_tolerance;         ///< frames before a run within this of its line join it once published (-1: off)
+  int run_resume_frames;           ///< frames after a published run breaks that a frame on its line resumes it (0: off)
 
   static DecisionOptions from(const Config& config);
 };
@@ -124,6 +125,13 @@ private:
   /// The frames before this one that may join, with matches within run_start_tolerance of the run's line
   /// (joinedBefore).
   size_t framesOnLineBefore() const;
+  /// The slope of the run's recent matches (places per frame; 0 with fewer than two).
+  double runSlope() const;
+  /// The last published run broke within consistent_frames frames, and this frame's match lies on its line
+  /// extended (within consistency_tolerance), as unique as a published run's frame must be (continue_uniqueness).
+  bool resumesPublishedLine(const Detection& detection, FrameStatus why) const;
+  /// The run resumes as published, with its line's last matches (resumesPublishedLine).
+  FrameStatus resumeRun(const Detection& detection);
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
 
@@ -137,6 +145,17 @@ private:
   uint32_t previous_session_ = 0;
   std::deque<uint64_t> recent_;  ///< the run's last consistent_frames matches
   size_t joined_before_ = 0;     ///< joinedBefore() of the last decision
+  /// The line of the last published frame, kept after its run breaks (resumesPublishedLine).
+  struct Line
+  {
+    uint64_t match = 0;
+    double slope = 0.0;
+    int direction = 1;
+    uint32_t session = 0;
+    size_t frames_since = 0;  ///< frames decided after it
+    bool valid = false;
+  };
+  Line line_;
   /// Each decided frame's best match, for a run that reaches back; the last kMaxJoined + 1, oldest first.
   struct Past
   {

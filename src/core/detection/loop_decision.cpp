@@ -6,6 +6,12 @@
 
 namespace openable
 {
+namespace
+{
+/// How much worse than the run's last unique frame a frame that continues the run may be (continuesPublishedRun).
+constexpr double kContinueSlack = 1.05;
+}  // namespace
+
 const char* toString(FrameStatus status)
 {
   switch (status)
@@ -59,6 +65,7 @@ DecisionOptions DecisionOptions::from(const Config& config)
   o.max_pace = config.max_pace;
   o.verified_min_uniqueness = config.verified_min_uniqueness;
   o.run_start_tolerance = config.run_start_tolerance;
+  o.run_resume_frames = config.run_resume_frames;
   return o;
 }
 
@@ -76,6 +83,7 @@ void LoopDecision::reset()
 {
   endRun();
   past_.clear();
+  line_ = Line();
 }
 
 void LoopDecision::endRun()
@@ -184,7 +192,6 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
   // Nor may the sequence grow worse than the run's last unique frame by more than 5 %: a camera
   // that leaves the route (or a stream that jumps) keeps its old sequence a few frames, matching the end of
   // the route with a rising distance (measured: 0.288 after 0.265 in test_map_sessions' jump).
-  constexpr double kContinueSlack = 1.05;
   return why == FrameStatus::NotUnique && published_ && detection.uniqueness >= options_.continue_uniqueness &&
          detection.best.distance <= kContinueSlack * unique_distance_ && advancesWithRun(detection);
 }
@@ -193,6 +200,10 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
 {
   joined_before_ = 0;
   const FrameStatus status = decideFrame(detection, geometry);
+  if (status == FrameStatus::Published)
+    line_ = Line{detection.best.id, runSlope(), detection.best.direction, detection.best.session, 0, true};
+  else if (++line_.frames_since >= static_cast<size_t>(std::max(0, options_.run_resume_frames)))
+    line_.valid = false;
   const bool may_be_late =
       status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
   const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
@@ -213,8 +224,10 @@ FrameStatus LoopDecision::decideFrame(const Detection& detection, const Geometry
   {
     if (status == FrameStatus::Published)  // passed the gates itself, not as a continuation
       unique_distance_ = detection.best.distance;
-    return joinRun(detection);
+    return resumesPublishedLine(detection, status) ? resumeRun(detection) : joinRun(detection);
   }
+  else if (resumesPublishedLine(detection, status))
+    return resumeRun(detection);
   // Geometry may stand in for the appearance evidence this frame lacks (asked only then: it costs a RANSAC).
   if (geometry && geometryMayStandIn(detection, status) && geometry())
   {
@@ -223,6 +236,55 @@ FrameStatus LoopDecision::decideFrame(const Detection& detection, const Geometry
   }
   endRun();
   return status;
+}
+
+double LoopDecision::runSlope() const
+{
+  return recent_.size() < 2 ? 0.0
+                            : (static_cast<double>(recent_.back()) - static_cast<double>(recent_.front())) /
+                                  static_cast<double>(recent_.size() - 1);
+}
+
+bool LoopDecision::resumesPublishedLine(const Detection& detection, FrameStatus why) const
+{
+  // A published run broken by a dip of uniqueness (a look-alike place for a few frames) leaves its line: where
+  // the revisit goes on, its next frames' matches lie on that line, extended, though they are seldom unique
+  // enough to start a run again (consistent_frames at min_uniqueness). Measured on Gardens Point day_right then
+  // day_left: after a dip at frame 163 of the revisit, every match of frames 168 to 199 on the line, at uniqueness
+  // 0.04 to 0.085. Within run_resume_frames frames of the line's last published frame, a frame that continues it
+  // as a published run's frame would (continue_uniqueness, the distance slack) resumes the run.
+  if (published_ || !line_.valid || options_.run_resume_frames <= 0)
+    return false;
+  const bool unique_enough = why == FrameStatus::Published ||
+                             (why == FrameStatus::NotUnique && detection.uniqueness >= options_.continue_uniqueness);
+  if (!unique_enough || detection.best.distance > kContinueSlack * unique_distance_ ||
+      detection.best.direction != line_.direction || detection.best.session != line_.session)
+    return false;
+  const double expected =
+      static_cast<double>(line_.match) + line_.slope * static_cast<double>(line_.frames_since + 1);
+  return std::fabs(static_cast<double>(detection.best.id) - expected) <= options_.consistency_tolerance;
+}
+
+FrameStatus LoopDecision::resumeRun(const Detection& detection)
+{
+  // The run goes on as if it had never broken: its last consistent_frames matches on the line, this one last.
+  const size_t frames = static_cast<size_t>(std::max(1, options_.consistent_frames));
+  const double since = static_cast<double>(line_.frames_since + 1);
+  recent_.clear();
+  for (size_t k = frames - 1; k > 0; --k)
+  {
+    const double on_line = static_cast<double>(line_.match) + line_.slope * (since - static_cast<double>(k));
+    recent_.push_back(static_cast<uint64_t>(std::max(0.0, std::round(on_line))));
+  }
+  recent_.push_back(detection.best.id);
+  run_ = static_cast<int>(frames);
+  run_start_match_ = recent_.front();
+  previous_match_ = detection.best.id;
+  previous_direction_ = detection.best.direction;
+  previous_session_ = detection.best.session;
+  published_ = true;
+  joined_before_ = framesOnLineBefore();
+  return FrameStatus::Published;
 }
 
 FrameStatus LoopDecision::joinRun(const Detection& detection)
