@@ -260,8 +260,7 @@ bool LoopDecision::resumesPublishedLine(const Detection& detection, FrameStatus 
   if (!unique_enough || detection.best.distance > kContinueSlack * unique_distance_ ||
       detection.best.direction != line_.direction || detection.best.session != line_.session)
     return false;
-  const double expected =
-      static_cast<double>(line_.match) + line_.slope * static_cast<double>(line_.frames_since + 1);
+  const double expected = static_cast<double>(line_.match) + line_.slope * static_cast<double>(line_.frames_since + 1);
   return std::fabs(static_cast<double>(detection.best.id) - expected) <= options_.consistency_tolerance;
 }
 
