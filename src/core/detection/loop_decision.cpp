@@ -266,13 +266,15 @@ bool LoopDecision::resumesPublishedLine(const Detection& detection, FrameStatus 
 
 FrameStatus LoopDecision::resumeRun(const Detection& detection)
 {
-  // The run goes on as if it had never broken: its last consistent_frames matches on the line, this one last.
+  // The run goes on as if it had never broken: its last consistent_frames matches on a line of its slope through
+  // this frame's match, so the frames before it that may join are judged against the line this frame is on
+  // (through the old line's extension instead, which this frame may be 2 places off, GP day_right -> night_right
+  // lost 6 frames a later run would have reached back to).
   const size_t frames = static_cast<size_t>(std::max(1, options_.consistent_frames));
-  const double since = static_cast<double>(line_.frames_since + 1);
   recent_.clear();
   for (size_t k = frames - 1; k > 0; --k)
   {
-    const double on_line = static_cast<double>(line_.match) + line_.slope * (since - static_cast<double>(k));
+    const double on_line = static_cast<double>(detection.best.id) - line_.slope * static_cast<double>(k);
     recent_.push_back(static_cast<uint64_t>(std::max(0.0, std::round(on_line))));
   }
   recent_.push_back(detection.best.id);
