@@ -175,10 +175,14 @@ TEST(OfflineTool, CameraInfoVerifiesLoopClosuresAsANodeletWould)
     }
   // A short route (100 places): 4 consistent frames instead of the default's 10, and no slips off a sequence's
   // line (with them this pairing closes 7 loops instead of 13: doc/results.md), leave enough loops to verify;
-  // what is tested here is verification, not the default's recall on short routes.
-  const std::string base = "--config " + std::string(OPENABLE_SOURCE_DIR) +
-                           "/config/default.yaml --set consistent_frames=4 --set slip_penalty=0 --quiet --reference " +
-                           in + " --output ";
+  // what is tested here is verification, not the default's recall on short routes. No run resumes
+  // (run_resume_frames 0): a frame that verification rejects breaks a run where the plain run goes on, and the
+  // line a later frame would resume differs, so "verification only removes loops" would not hold frame by frame.
+  const std::string base =
+      "--config " + std::string(OPENABLE_SOURCE_DIR) +
+      "/config/default.yaml --set consistent_frames=4 --set slip_penalty=0 --set run_resume_frames=0 --quiet "
+      "--reference " +
+      in + " --output ";
   const std::string camera =
       " --camera-info " + std::string(OPENABLE_SOURCE_DIR) + "/test/data/calibration/gardens_point_assumed.yaml";
   const std::string plain = freshDir("verify_plain"), required = freshDir("verify_required"),
