@@ -104,8 +104,8 @@ struct Config
   /// matches lie within this many places of its line, extended back, are published too, late, with their own
   /// stamps (-1 = off: a run's first consistent_frames - 1 frames are lost).
   int run_start_tolerance = 1;
-  /// Frames after a published run's last frame during which a frame on its line, extended (within consistency_tolerance),
-  /// at continue_uniqueness, resumes it (0 = off).
+  /// Frames after a published run's last frame during which a frame on its line, extended (within
+  /// consistency_tolerance), at continue_uniqueness, resumes it (0 = off).
   int run_resume_frames = 30;
   int confirm_frames = 3;  ///< a loop closure is published once this many more stored frames go on with its run
                            ///< (0 = at once; LoopConfirmation)

@@ -127,10 +127,11 @@ private:
   size_t framesOnLineBefore() const;
   /// The slope of the run's recent matches (places per frame; 0 with fewer than two).
   double runSlope() const;
-  /// The last published run broke within consistent_frames frames, and this frame's match lies on its line
-  /// extended (within consistency_tolerance), as unique as a published run's frame must be (continue_uniqueness).
+  /// The last published frame is at most run_resume_frames frames back, its run broke, and this frame's match lies
+  /// on its line extended (within consistency_tolerance), as unique as a published run's frame must be
+  /// (continue_uniqueness).
   bool resumesPublishedLine(const Detection& detection, FrameStatus why) const;
-  /// The run resumes as published, with its line's last matches (resumesPublishedLine).
+  /// The run resumes as published, on a line of the old slope through this frame's match (resumesPublishedLine).
   FrameStatus resumeRun(const Detection& detection);
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
