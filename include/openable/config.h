@@ -94,7 +94,7 @@ struct Config
                                      ///< standing still: not stored, not matched (0 = off)
 
   // Loop-closure decision (OnlineDetector): what must hold, besides the gates above, before a loop is published.
-  int min_candidates = 21;         ///< fewer candidate places: "too early" (2 x uniqueness_window + 1: a rival)
+  int min_candidates = 21;         ///< fewer candidate places: "too early" (2 x uniqueness_window + 1 places)
   int consistent_frames = 10;      ///< this many consecutive frames must pass the gates with matches advancing
                                    ///< together (1 = off)
   int consistency_tolerance = 2;   ///< frames a match may deviate from advancing one place per frame

@@ -163,7 +163,7 @@ const std::vector<KeyAccess>& table()
               &Config::standstill_distance).range(0, 1).live(),
       makeKey("min_candidates",
               "loop-closure decision: fewer candidate places than this is 'too early' (21 = 2 x uniqueness_window + 1: "
-              "a best match always has a rival)",
+              "a best match has a rival outside the window unless it is the middle one)",
               &Config::min_candidates).range(0, 100000000).live(),
       makeKey("consistent_frames",
               "loop-closure decision: consecutive frames that must pass the gates with matches advancing "

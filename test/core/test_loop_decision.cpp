@@ -31,6 +31,9 @@ Detection candidate(uint64_t match, float uniqueness, size_t candidates = 100, f
   d.best.distance = distance;
   d.best.direction = static_cast<int8_t>(direction);
   d.uniqueness = uniqueness;
+  Candidate rival = d.best;  // the second best place, beyond the uniqueness window
+  rival.id += 50;
+  d.top = {d.best, rival};
   return d;
 }
 }  // namespace
@@ -208,6 +211,9 @@ TEST(LoopDecision, ScoreIsTheUniquenessAndZeroWhileTooEarly)
   const LoopDecision decision(decisionConfig());
   EXPECT_FLOAT_EQ(decision.score(candidate(1, 0.25f)), 0.25f);
   EXPECT_FLOAT_EQ(decision.score(candidate(1, 1.0f, 9)), 0.0f);  // a lone candidate: no rival, no meaning
+  Detection alone = candidate(1, 1.0f);
+  alone.top.resize(1);  // enough places, but none outside the uniqueness window: no rival either
+  EXPECT_FLOAT_EQ(decision.score(alone), 0.0f);
   EXPECT_FLOAT_EQ(decision.score(Detection()), 0.0f);
 }
 

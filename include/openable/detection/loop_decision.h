@@ -99,7 +99,7 @@ public:
   /// The most frames a run reaches back (joinedBefore).
   static constexpr size_t kMaxJoined = 256;
   /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
-  /// candidates, or fewer than min_candidates: a lone candidate has no rival and would score 1).
+  /// candidates, fewer than min_candidates, or no rival place: a lone candidate would score 1).
   float score(const Detection& detection) const;
 
   /// Takes new values of the decision keys (threshold, min_uniqueness, min_candidates, consistent_frames,

@@ -95,8 +95,10 @@ void LoopDecision::endRun()
 
 float LoopDecision::score(const Detection& detection) const
 {
+  // A best match with no rival outside the uniqueness window (the only distinct place) is "unique" by default.
+  const bool has_rival = detection.top.size() >= 2;
   const bool meaningful =
-      detection.has_candidates && detection.candidates >= static_cast<size_t>(options_.min_candidates);
+      detection.has_candidates && detection.candidates >= static_cast<size_t>(options_.min_candidates) && has_rival;
   return meaningful ? detection.uniqueness : 0.0f;
 }
 
