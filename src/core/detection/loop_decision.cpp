@@ -222,14 +222,16 @@ FrameStatus LoopDecision::decideFrame(const Detection& detection, const Geometry
     status = detection.excluded ? FrameStatus::Excluded : FrameStatus::TooEarly;
   else if (detection.candidates < static_cast<size_t>(options_.min_candidates))
     status = FrameStatus::TooEarly;
-  else if (gatesPass(detection, status) || continuesPublishedRun(detection, status))
+  else
   {
-    if (status == FrameStatus::Published)  // passed the gates itself, not as a continuation
+    const bool passes = gatesPass(detection, status) || continuesPublishedRun(detection, status);
+    if (passes && status == FrameStatus::Published)  // passed the gates itself, not as a continuation
       unique_distance_ = detection.best.distance;
-    return resumesPublishedLine(detection, status) ? resumeRun(detection) : joinRun(detection);
+    if (resumesPublishedLine(detection, status))
+      return resumeRun(detection);
+    if (passes)
+      return joinRun(detection);
   }
-  else if (resumesPublishedLine(detection, status))
-    return resumeRun(detection);
   // Geometry may stand in for the appearance evidence this frame lacks (asked only then: it costs a RANSAC).
   if (geometry && geometryMayStandIn(detection, status) && geometry())
   {
@@ -325,7 +327,7 @@ size_t LoopDecision::framesOnLineBefore() const
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return 0;
   const double last = static_cast<double>(recent_.back());
-  const double slope = (last - static_cast<double>(recent_.front())) / static_cast<double>(recent_.size() - 1);
+  const double slope = runSlope();
   size_t joined = 0;
   for (auto p = past_.rbegin(); p != past_.rend() && joined < kMaxJoined; ++p, ++joined)
   {
