@@ -1,6 +1,8 @@
 // LoopConfirmation: a loop closure goes out once confirm_frames more stored frames went on with its run.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
@@ -68,13 +70,24 @@ std::vector<FrameStatus> statuses(const std::vector<FrameOutcome>& outcomes)
   return out;
 }
 
+/// Whether the stored frame before stored frame `j` (repeats aside) passed.
+bool previousStoredPassed(const std::vector<Step>& steps, size_t j)
+{
+  while (j-- > 0)
+    if (steps[j] != Step::Repeat)
+      return steps[j] == Step::Passed;
+  return false;
+}
+
 /// The rule written plainly: a stored frame that passed is published iff the next `frames` stored frames all
 /// passed; a repeat has its stored frame's fate; a stored frame that failed keeps its status, and its repeats
-/// are standstills; a Held frame is Inconsistent (its repeats standstills) unless it is among the joins[p] Held
-/// stored frames just before a passed frame p (none other between), whose fate it then shares, repeats included.
+/// are standstills; a Held frame is Inconsistent (its repeats standstills) unless it is among the joins[p] stored
+/// frames just before a passed frame p that are Held or passed and not published (a run that ended before they were
+/// confirmed), with no failed or published frame between, whose fate it then shares, repeats included.
 std::vector<FrameStatus> reference(const std::vector<Step>& steps, int frames, const std::vector<size_t>& joins = {})
 {
   std::vector<FrameStatus> out(steps.size(), FrameStatus::Standstill);
+  std::vector<size_t> took(steps.size(), 0);  // of a passed frame: the frames before it that joined it
   FrameStatus fate = FrameStatus::Standstill;
   for (size_t i = 0; i < steps.size(); ++i)
   {
@@ -99,20 +112,30 @@ std::vector<FrameStatus> reference(const std::vector<Step>& steps, int frames, c
       confirmed = confirmed && steps[j] == Step::Passed;
     }
     fate = out[i] = confirmed && later == frames ? FrameStatus::Published : FrameStatus::Unconfirmed;
-    // The held frames just before it that join it: published with it, or left Inconsistent.
+    // The held frames just before it that join it: published with it, or left as they were. Before an unconfirmed
+    // run, only the frames its first frame took were held with it.
     size_t joined = 0;
-    for (size_t j = i;
-         j-- > 0 && joined < (i < joins.size() ? joins[i] : 0) && steps[j] != Step::Passed && steps[j] != Step::Failed;)
+    size_t before_run = SIZE_MAX;  // frames still held before the unconfirmed run walked through
+    for (size_t j = i; j-- > 0 && joined < (i < joins.size() ? joins[i] : 0) && steps[j] != Step::Failed;)
     {
-      if (steps[j] != Step::Held)
+      if (steps[j] == Step::Repeat)
         continue;
+      if (steps[j] == Step::Passed && (joined == 0 || out[j] == FrameStatus::Published))
+        break;  // the same run (still waiting), or a loop closure that went out
+      if (before_run == 0)
+        break;
+      if (before_run != SIZE_MAX)
+        --before_run;
       ++joined;
+      if (steps[j] == Step::Passed && !previousStoredPassed(steps, j))
+        before_run = std::min(before_run, took[j]);
       if (fate != FrameStatus::Published)
         continue;
       out[j] = FrameStatus::Published;
       for (size_t k = j + 1; k < i && steps[k] == Step::Repeat; ++k)  // its repeats
         out[k] = FrameStatus::Published;
     }
+    took[i] = joined;
   }
   return out;
 }
@@ -227,6 +250,29 @@ TEST(LoopConfirmation, ARunsFirstFramesGoOutAtOnceWithZeroFramesAndNeverAcrossAn
   EXPECT_TRUE(outcomes[2].confirmed.empty());
 }
 
+TEST(LoopConfirmation, ARunsUnconfirmedLastFramesJoinALaterRunThatTakesThem)
+{
+  // Frames 0 and 1 pass, frame 2 ends their run before either is confirmed (2 frames); frame 3 starts a run on
+  // their line and takes 0, 1 and 2: all four go out with frame 5, 0 and 1 as frames that were unconfirmed.
+  const std::vector<Step> steps = {Step::Passed, Step::Passed, Step::Held, Step::Passed, Step::Passed, Step::Passed};
+  const std::vector<FrameOutcome> outcomes = drive(steps, 2, {0, 0, 0, 3});
+  ASSERT_EQ(outcomes[5].confirmed.size(), 4u);
+  const std::vector<FrameStatus> before = {FrameStatus::Unconfirmed, FrameStatus::Unconfirmed,
+                                           FrameStatus::Inconsistent, FrameStatus::Pending};
+  for (size_t k = 0; k < 4; ++k)
+  {
+    EXPECT_EQ(outcomes[5].confirmed[k].frame, k);
+    EXPECT_EQ(outcomes[5].confirmed[k].status_before, before[k]);
+  }
+  EXPECT_EQ(statuses(settled(outcomes)),
+            (std::vector<FrameStatus>{FrameStatus::Published, FrameStatus::Published, FrameStatus::Published,
+                                      FrameStatus::Published, FrameStatus::Unconfirmed, FrameStatus::Unconfirmed}));
+  // Taking one frame back, only frame 2 joins; a failed frame between them ends what was held.
+  EXPECT_EQ(drive(steps, 2, {0, 0, 0, 1})[5].confirmed.size(), 2u);
+  const std::vector<Step> failed = {Step::Passed, Step::Passed, Step::Failed, Step::Passed, Step::Passed, Step::Passed};
+  EXPECT_EQ(drive(failed, 2, {0, 0, 0, 3})[5].confirmed.size(), 1u);
+}
+
 TEST(LoopConfirmation, ARunThatEndsUnconfirmedLeavesItsFirstFramesInconsistentAndUncounted)
 {
   LoopConfirmation confirmation(3);
@@ -325,8 +371,11 @@ TEST(LoopConfirmation, OnRealImagesEveryConfirmedLoopWasALoopAndArrivesThreeFram
         EXPECT_EQ(later.back().query.id, c.query.id + 3) << "frame " << i;
       else
       {
-        // A run's first frames, or a frame before the run not unique enough (no stop in this stream).
-        EXPECT_TRUE(c.status_before == FrameStatus::Inconsistent || c.status_before == FrameStatus::NotUnique) << i;
+        // A run's first frames, a frame before the run not unique enough (no stop in this stream), or the last
+        // frames of a run that broke before they were confirmed, taken by a later run on their line.
+        EXPECT_TRUE(c.status_before == FrameStatus::Inconsistent || c.status_before == FrameStatus::NotUnique ||
+                    c.status_before == FrameStatus::Unconfirmed)
+            << i;
         EXPECT_GT(later.back().query.id, c.query.id + 3) << "frame " << i;
         EXPECT_LE(later.back().query.id, c.query.id + 3 + LoopDecision::kMaxJoined) << "frame " << i;
       }

@@ -283,17 +283,17 @@ void expectNaiveReference(bool geometry)
           matches.push_back(static_cast<double>(previous));
         }
         expected = run >= c.consistent_frames ? FrameStatus::Published : FrameStatus::Inconsistent;
-        // The frame that publishes the run (at this pace, its consistent_frames-th): the frames before it that were
-        // not published (every frame here has candidates) within run_start_tolerance of the line through the run's
-        // first and last match, extended back, join it, counted back to the first that is not.
+        // The frame that publishes the run (at this pace, its consistent_frames-th): the frames before it (every
+        // frame here has candidates; a published one may still be held by the confirmation) within
+        // run_start_tolerance of the line through the run's first and last match, extended back, join it, counted
+        // back to the first that is not.
         if (run == c.consistent_frames && c.run_start_tolerance >= 0 && run > 1)
         {
           const double slope = (matches.back() - matches.front()) / static_cast<double>(matches.size() - 1);
           for (size_t k = statuses.size(); k-- > 0 && joined < LoopDecision::kMaxJoined; ++joined)
           {
             const double line = matches.back() - slope * static_cast<double>(statuses.size() - k);
-            if (statuses[k] == FrameStatus::Published ||
-                std::fabs(double(seen[k].best.id) - line) > c.run_start_tolerance)
+            if (std::fabs(double(seen[k].best.id) - line) > c.run_start_tolerance)
               break;
           }
         }

@@ -82,9 +82,10 @@ public:
   FrameStatus decide(const Detection& detection, const GeometryCheck& geometry = GeometryCheck());
   /// After a Published decision: how many of the stored frames just before this one join its loop closure now,
   /// published after the fact. Not 0 only where the run becomes consistent: counted back from this frame, the
-  /// frames that may join (mayJoinLater: the run's first frames, and before them frames not unique enough) whose
-  /// matches lie within run_start_tolerance of the run's line, up to the first that does not (at most kMaxJoined).
-  /// 0 after any other decision.
+  /// frames that may join (mayJoinLater: the run's first frames, and before them frames not unique enough) or were
+  /// published (the last of an earlier run may have broken before they were confirmed) whose matches lie within
+  /// run_start_tolerance of the run's line, up to the first that does not (at most kMaxJoined). The confirmation
+  /// joins as many of them as it still holds (published ones that went out are not held). 0 after any other decision.
   size_t joinedBefore() const
   {
     return joined_before_;
@@ -164,6 +165,7 @@ private:
     int direction;
     uint32_t session;
     bool may_join;
+    bool published;  ///< decided Published: its loop closure may still be pending when the run breaks
   };
   std::deque<Past> past_;
 };

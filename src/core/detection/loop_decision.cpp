@@ -209,7 +209,8 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
   const bool may_be_late =
       status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
   const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
-  past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join});
+  past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join,
+                       status == FrameStatus::Published});
   if (past_.size() > kMaxJoined + 1)
     past_.pop_front();
   return status;
@@ -326,13 +327,16 @@ size_t LoopDecision::framesOnLineBefore() const
   // the line (the run's frames with no line of their own: 30 more wrong loops on 90 pace streams).
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return 0;
+  // A published frame is counted too: the last ones of a run that broke before they were confirmed are still
+  // held (LoopConfirmation), and a run on their line takes them; the ones that went out are not held any more,
+  // and the confirmation joins only what it holds.
   const double last = static_cast<double>(recent_.back());
   const double slope = runSlope();
   size_t joined = 0;
   for (auto p = past_.rbegin(); p != past_.rend() && joined < kMaxJoined; ++p, ++joined)
   {
     const double expected = last - slope * static_cast<double>(joined + 1);
-    if (!p->may_join || p->direction != previous_direction_ || p->session != previous_session_ ||
+    if (!(p->may_join || p->published) || p->direction != previous_direction_ || p->session != previous_session_ ||
         std::fabs(static_cast<double>(p->id) - expected) > options_.run_start_tolerance)
       break;
   }
