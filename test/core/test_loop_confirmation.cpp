@@ -28,7 +28,7 @@ enum class Step
 };
 
 /// Drives a LoopConfirmation as OnlineDetector does and returns every outcome in order, as process() gave them.
-/// joins[i]: LoopDecision::joinedBefore() of a Passed frame i (none: 0).
+/// joins[i]: how many frames just before a Passed frame i join it (LoopDecision::joinedBefore(): 1 .. joins[i]).
 std::vector<FrameOutcome> drive(const std::vector<Step>& steps, int frames, const std::vector<size_t>& joins = {})
 {
   LoopConfirmation confirmation(frames);
@@ -53,8 +53,10 @@ std::vector<FrameOutcome> drive(const std::vector<Step>& steps, int frames, cons
     o.query.id = i;
     o.status = steps[i] == Step::Passed ? FrameStatus::Published
                                         : (steps[i] == Step::Held ? FrameStatus::Inconsistent : FrameStatus::NotUnique);
-    std::vector<FrameOutcome> confirmed =
-        confirmation.stored(o, i < joins.size() ? joins[i] : 0, o.status == FrameStatus::Inconsistent);
+    std::vector<size_t> joined(i < joins.size() ? joins[i] : 0);
+    for (size_t k = 0; k < joined.size(); ++k)
+      joined[k] = k + 1;  // the joins[i] frames just before it
+    std::vector<FrameOutcome> confirmed = confirmation.stored(o, joined, o.status == FrameStatus::Inconsistent);
     last = o;
     o.confirmed = std::move(confirmed);
     outcomes.push_back(o);
@@ -273,15 +275,35 @@ TEST(LoopConfirmation, ARunsUnconfirmedLastFramesJoinALaterRunThatTakesThem)
   EXPECT_EQ(drive(failed, 2, {0, 0, 0, 3})[5].confirmed.size(), 1u);
 }
 
+TEST(LoopConfirmation, FramesTheDecisionPassesOverStayAsTheyWere)
+{
+  // Frames 0 to 3 held; the run published at 4 takes 1, 2 and 4 frames back (3, 2 and 0): 1 stays Inconsistent.
+  LoopConfirmation confirmation(0);
+  FrameOutcome o;
+  o.status = FrameStatus::Inconsistent;
+  for (uint64_t frame = 0; frame < 4; ++frame)
+  {
+    o.frame = frame;
+    confirmation.stored(o, {}, true);
+  }
+  o.frame = 4;
+  o.status = FrameStatus::Published;
+  const std::vector<FrameOutcome> confirmed = confirmation.stored(o, {1, 2, 4, 9});  // 9: not held
+  ASSERT_EQ(confirmed.size(), 3u);
+  EXPECT_EQ(confirmed[0].frame, 0u);  // oldest first
+  EXPECT_EQ(confirmed[1].frame, 2u);
+  EXPECT_EQ(confirmed[2].frame, 3u);
+}
+
 TEST(LoopConfirmation, ARunThatEndsUnconfirmedLeavesItsFirstFramesInconsistentAndUncounted)
 {
   LoopConfirmation confirmation(3);
   FrameOutcome o;
   o.status = FrameStatus::Inconsistent;
-  confirmation.stored(o, 0, true);
-  confirmation.stored(o, 0, true);
+  confirmation.stored(o, {}, true);
+  confirmation.stored(o, {}, true);
   o.status = FrameStatus::Published;
-  confirmation.stored(o, 2);
+  confirmation.stored(o, {1, 2});
   EXPECT_EQ(confirmation.pending(), 3u);
   o.status = FrameStatus::NotUnique;
   confirmation.stored(o);

@@ -1,6 +1,7 @@
 // LoopDecision: known answers on hand-made detections, and a property test against a naive reference.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <random>
@@ -115,23 +116,40 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
   for (uint64_t m : {10, 11, 12, 13})
   {
     EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
-    EXPECT_EQ(decision.joinedBefore(), 0u);
+    EXPECT_EQ(decision.joinedBefore().size(), 0u);
   }
   EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
-  EXPECT_EQ(decision.joinedBefore(), 4u);  // every earlier frame: on the line
+  EXPECT_EQ(decision.joinedBefore().size(), 4u);  // every earlier frame: on the line
   EXPECT_EQ(decision.decide(candidate(15, 0.3f)), FrameStatus::Published);
-  EXPECT_EQ(decision.joinedBefore(), 0u);  // only where the run becomes consistent
+  EXPECT_EQ(decision.joinedBefore().size(), 0u);  // only where the run becomes consistent
 
   // The sequence lagged at the start: 13 is 2 places off the line 10 -> 14, within the consistency rule's 2 but
-  // not the 1 of the frames published after the fact; counted back from the published frame, it stops there.
+  // not the 1 of the frames published after the fact; counted back from the published frame, it is passed over.
   decision.reset();
   for (uint64_t m : {10, 13, 12, 13})
     EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
   EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
-  EXPECT_EQ(decision.joinedBefore(), 2u);  // 12 and 13
+  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 2, 4}));  // 13, 12, then 10
+
+  // A look-alike place for two frames (40, 41) before the run: the frames before them on the line join it too; three
+  // in a row end the reach-back.
+  for (const bool three : {false, true})
+  {
+    decision.reset();
+    for (uint64_t m : {5, 6, 7, 40, 41})
+      EXPECT_EQ(decision.decide(candidate(m, 0.01f)), FrameStatus::NotUnique);
+    if (three)
+      decision.decide(candidate(42, 0.01f));
+    for (uint64_t m : {10, 11, 12, 13})
+      decision.decide(candidate(m, 0.3f));
+    EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
+    const std::vector<size_t> expected =
+        three ? std::vector<size_t>{1, 2, 3, 4} : std::vector<size_t>{1, 2, 3, 4, 7, 8, 9};
+    EXPECT_EQ(decision.joinedBefore(), expected);
+  }
 
   // Before the run, frames not unique enough to start it, on its line extended back: they join it too, back to the
-  // first that is off the line (4: the line says 6) or was decided otherwise.
+  // first that was decided otherwise or the third in a row off the line (4: the line says 6; 20: 5).
   decision.reset();
   for (uint64_t m : {20, 4, 7, 8, 9})
   {
@@ -142,7 +160,7 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
     EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
   EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
   EXPECT_FALSE(decision.mayJoinLater());
-  EXPECT_EQ(decision.joinedBefore(), 7u);  // 13, 12, 11, 10, then 9, 8, 7
+  EXPECT_EQ(decision.joinedBefore().size(), 7u);  // 13, 12, 11, 10, then 9, 8, 7
   EXPECT_EQ(decision.decide(Detection()), FrameStatus::TooEarly);
   EXPECT_FALSE(decision.mayJoinLater());  // no best match
 
@@ -155,7 +173,7 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
     off.decide(candidate(m, 0.3f));
     EXPECT_FALSE(off.mayJoinLater());
   }
-  EXPECT_EQ(off.joinedBefore(), 0u);
+  EXPECT_EQ(off.joinedBefore().size(), 0u);
 }
 
 // A published run broken by a dip of uniqueness resumes where a frame's match lies on its line, extended, at
@@ -177,7 +195,8 @@ TEST(LoopDecision, ABrokenRunResumesOnItsLineWithinRunResumeFrames)
   EXPECT_EQ(decision.decide(candidate(3, 0.01f)), FrameStatus::NotUnique);   // the dip: a look-alike place
   EXPECT_EQ(decision.decide(candidate(14, 0.02f)), FrameStatus::NotUnique);  // on the line, below continue_uniqueness
   EXPECT_EQ(decision.decide(candidate(15, 0.07f)), FrameStatus::Published);  // on the line (12 + 3), unique enough
-  EXPECT_EQ(decision.joinedBefore(), 1u);                                    // 14 joins it
+  // 14 joins it; past the dip, the run's own frames 12, 11, 10 (the confirmation takes those it still holds).
+  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 3, 4, 5}));
   EXPECT_EQ(decision.decide(candidate(16, 0.07f)), FrameStatus::Published);  // and the run goes on
 
   // Off the line (the line says 15, 17 is 2 off with tolerance 1): nothing resumes; a run must start again.
@@ -253,7 +272,7 @@ void expectNaiveReference(bool geometry)
         return uniqueness >= c.min_uniqueness || (geometry && uniqueness >= c.verified_min_uniqueness && verified[k]);
       };
       FrameStatus expected = FrameStatus::NotUnique;
-      size_t joined = 0;
+      std::vector<size_t> joined;  // frames back from this one
       if (passes(seen.size() - 1))
       {
         // Runs restart where a step or the span from the run's start breaks: replay from the start.
@@ -286,14 +305,20 @@ void expectNaiveReference(bool geometry)
         // The frame that publishes the run (at this pace, its consistent_frames-th): the frames before it (every
         // frame here has candidates; a published one may still be held by the confirmation) within
         // run_start_tolerance of the line through the run's first and last match, extended back, join it, counted
-        // back to the first that is not.
+        // back to the first of more than kMaxSkipped frames in a row that are not, at most kMaxJoined back.
         if (run == c.consistent_frames && c.run_start_tolerance >= 0 && run > 1)
         {
           const double slope = (matches.back() - matches.front()) / static_cast<double>(matches.size() - 1);
-          for (size_t k = statuses.size(); k-- > 0 && joined < LoopDecision::kMaxJoined; ++joined)
+          size_t off_line = 0;
+          for (size_t back = 1; back <= std::min(statuses.size(), LoopDecision::kMaxJoined); ++back)
           {
-            const double line = matches.back() - slope * static_cast<double>(statuses.size() - k);
-            if (std::fabs(double(seen[k].best.id) - line) > c.run_start_tolerance)
+            const double line = matches.back() - slope * static_cast<double>(back);
+            if (std::fabs(double(seen[seen.size() - 1 - back].best.id) - line) <= c.run_start_tolerance)
+            {
+              joined.push_back(back);
+              off_line = 0;
+            }
+            else if (++off_line > LoopDecision::kMaxSkipped)
               break;
           }
         }

@@ -44,12 +44,13 @@ public:
     setFrames(frames);
   }
 
-  /// A stored frame, after the decision and verification. A Published outcome becomes Pending (frames > 0);
-  /// `joined_before` of the held frames just before it (LoopDecision::joinedBefore) join it. Returns the earlier
+  /// A stored frame, after the decision and verification. A Published outcome becomes Pending (frames > 0); the
+  /// held frames `joined_before` frames back from it (LoopDecision::joinedBefore; 1: the frame just before) join it,
+  /// those not held are passed over. Returns the earlier
   /// outcomes it confirms, oldest first, each Published (frames 0: the frames that joined it); when the frame is
   /// not Published itself, the run ended and every pending one is dropped, and it is held when it `may_join` a
   /// later run (LoopDecision::mayJoinLater, and whatever else the caller requires of it).
-  std::vector<Outcome> stored(Outcome& outcome, size_t joined_before = 0, bool may_join = false)
+  std::vector<Outcome> stored(Outcome& outcome, const std::vector<size_t>& joined_before = {}, bool may_join = false)
   {
     std::vector<Outcome> confirmed;
     if (!outcome.published())
@@ -67,12 +68,17 @@ public:
       waiting_.pop_front();
     }
     // The run's first frames that join it: confirmed with this frame.
-    const size_t joined = std::min(joined_before, held_.size());
-    for (auto w = held_.end() - static_cast<long>(joined); w != held_.end(); ++w)
+    // Oldest first: the frames furthest back come first.
+    for (auto back = joined_before.rbegin(); back != joined_before.rend(); ++back)
+    {
+      if (*back == 0 || *back > held_.size())
+        continue;  // not held (it went out, or a frame between them ended what was held)
+      Waiting& w = held_[held_.size() - *back];
       if (frames_ == 0)
-        confirm(*w, confirmed);
+        confirm(w, confirmed);
       else
-        waiting_.push_back(std::move(*w));
+        waiting_.push_back(std::move(w));
+    }
     held_.clear();
     if (frames_ > 0)
     {

@@ -200,7 +200,7 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
 
 FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck& geometry)
 {
-  joined_before_ = 0;
+  joined_before_.clear();
   const FrameStatus status = decideFrame(detection, geometry);
   if (status == FrameStatus::Published)
     line_ = Line{detection.best.id, runSlope(), detection.best.direction, detection.best.session, 0, true};
@@ -316,7 +316,7 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
 }
 
-size_t LoopDecision::framesOnLineBefore() const
+std::vector<size_t> LoopDecision::framesOnLineBefore() const
 {
   // The frames a run needs before it is consistent were right where the run is right: its matches were on the
   // line already, and often so were the frames before it that were not unique enough to start it (the revisit
@@ -325,19 +325,30 @@ size_t LoopDecision::framesOnLineBefore() const
   // 0.335 -> 0.58 (doc/results.md). Held to a tighter line than the consistency rule: at the start of a revisit,
   // and where the pace changes, the sequence lags the true place by a few places before its matches settle on
   // the line (the run's frames with no line of their own: 30 more wrong loops on 90 pace streams).
-  if (options_.run_start_tolerance < 0 || recent_.size() < 2)
-    return 0;
   // A published frame is counted too: the last ones of a run that broke before they were confirmed are still
   // held (LoopConfirmation), and a run on their line takes them; the ones that went out are not held any more,
   // and the confirmation joins only what it holds.
+  // Up to kMaxSkipped frames in a row off the line (a look-alike place for a frame or two) are passed over, not
+  // joined: GP day_right then day_left, a match 2 or 3 places off at revisit frames 30-31 and 24-25 ended the
+  // reach-back there, with the frames before them on the line.
+  std::vector<size_t> joined;
+  if (options_.run_start_tolerance < 0 || recent_.size() < 2)
+    return joined;
   const double last = static_cast<double>(recent_.back());
   const double slope = runSlope();
-  size_t joined = 0;
-  for (auto p = past_.rbegin(); p != past_.rend() && joined < kMaxJoined; ++p, ++joined)
+  size_t back = 0, skipped = 0;
+  for (auto p = past_.rbegin(); p != past_.rend() && back < kMaxJoined; ++p)
   {
-    const double expected = last - slope * static_cast<double>(joined + 1);
-    if (!(p->may_join || p->published) || p->direction != previous_direction_ || p->session != previous_session_ ||
-        std::fabs(static_cast<double>(p->id) - expected) > options_.run_start_tolerance)
+    ++back;
+    if (!(p->may_join || p->published) || p->direction != previous_direction_ || p->session != previous_session_)
+      break;
+    const double expected = last - slope * static_cast<double>(back);
+    if (std::fabs(static_cast<double>(p->id) - expected) <= options_.run_start_tolerance)
+    {
+      joined.push_back(back);
+      skipped = 0;
+    }
+    else if (++skipped > kMaxSkipped)
       break;
   }
   return joined;
