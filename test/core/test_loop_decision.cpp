@@ -124,15 +124,16 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
   EXPECT_EQ(decision.joinedBefore().size(), 0u);  // only where the run becomes consistent
 
   // The sequence lagged at the start: 13 is 2 places off the line 10 -> 14, within the consistency rule's 2 but
-  // not the 1 of the frames published after the fact; counted back from the published frame, it is passed over.
+  // not the 1 of the frames published after the fact; counted back from the published frame, it stops there (a
+  // frame unique enough but off the line is not a look-alike place to pass over).
   decision.reset();
   for (uint64_t m : {10, 13, 12, 13})
     EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
   EXPECT_EQ(decision.decide(candidate(14, 0.3f)), FrameStatus::Published);
-  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 2, 4}));  // 13, 12, then 10
+  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 2}));  // 13 and 12
 
-  // A look-alike place for two frames (40, 41) before the run: the frames before them on the line join it too; three
-  // in a row end the reach-back.
+  // A look-alike place for two not-unique frames (40, 41) before the run: the frames before them on the line join it
+  // too; three in a row end the reach-back.
   for (const bool three : {false, true})
   {
     decision.reset();
@@ -305,7 +306,8 @@ void expectNaiveReference(bool geometry)
         // The frame that publishes the run (at this pace, its consistent_frames-th): the frames before it (every
         // frame here has candidates; a published one may still be held by the confirmation) within
         // run_start_tolerance of the line through the run's first and last match, extended back, join it, counted
-        // back to the first of more than kMaxSkipped frames in a row that are not, at most kMaxJoined back.
+        // back to the first that is not, passing over at most kMaxSkipped NotUnique ones in a row (at most kMaxJoined
+        // back).
         if (run == c.consistent_frames && c.run_start_tolerance >= 0 && run > 1)
         {
           const double slope = (matches.back() - matches.front()) / static_cast<double>(matches.size() - 1);
@@ -318,7 +320,8 @@ void expectNaiveReference(bool geometry)
               joined.push_back(back);
               off_line = 0;
             }
-            else if (++off_line > LoopDecision::kMaxSkipped)
+            else if (statuses[statuses.size() - back] != FrameStatus::NotUnique ||
+                     ++off_line > LoopDecision::kMaxSkipped)
               break;
           }
         }

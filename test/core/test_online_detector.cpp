@@ -123,7 +123,7 @@ TEST(OnlineDetector, DefaultConfigurationPublishesTrustworthyLoopsDayThenNight)
 // closure. On real streams with a revisit it adds loops and no wrong one, each joined frame a loop with its own
 // frame's place, and the first traversal (no revisit) still publishes nothing. Measured, default.yaml without runs
 // that resume (run_resume_frames 0, which recovers some of the same frames): day_right -> night_right 0.765 -> 0.885,
-// day_right -> day_left 0.335 -> 0.640 (doc/results.md "A run reaches back", "A run reaches further back").
+// day_right -> day_left 0.335 -> 0.625 (doc/results.md "A run reaches back", "A run reaches further back").
 TEST(OnlineDetector, ARunReachesBackToTheFramesOnItsLineAndNoWrongLoop)
 {
   Config on = shipped("default");
@@ -139,8 +139,8 @@ TEST(OnlineDetector, ARunReachesBackToTheFramesOnItsLineAndNoWrongLoop)
 // A short route (60 places, revisited once): in loop-closure mode a sequence is a candidate from
 // min_loop_sequence_length (21) frames and min_candidates (21) places, not only once it has all L = 30 frames and
 // 30 places, so the revisit gets candidates from its 12th frame instead of its 21st. Measured, default.yaml:
-// day_right 0-59 then night_right 0-59 0.583 -> 0.767, day_left then day_right (not tuned on) 0.617 -> 0.767, 0
-// wrong (doc/results.md "A short route"; 0.467 before a reach-back passed over frames off the line).
+// day_right 0-59 then night_right 0-59 0.467 -> 0.767, day_left then day_right (not tuned on) 0.617 -> 0.767, 0
+// wrong (doc/results.md "A short route").
 TEST(OnlineDetector, AShortRouteGetsLoopsFromTheRevisitsFirstFrames)
 {
   Config before = shipped("default");
@@ -162,7 +162,7 @@ TEST(OnlineDetector, AShortRouteGetsLoopsFromTheRevisitsFirstFrames)
 
 // A published run broken by a dip of uniqueness resumes (run_resume_frames) where the next frames' matches lie on
 // its line, extended, at continue_uniqueness: on real streams with a revisit it adds loops and no wrong one, and the
-// first traversal still publishes nothing. Measured, default.yaml: day_right -> day_left 0.640 -> 0.760, day_left
+// first traversal still publishes nothing. Measured, default.yaml: day_right -> day_left 0.625 -> 0.735, day_left
 // -> day_right (not tuned on) 0.660 -> 0.830, day_right -> night_right 0.885 -> 0.875 (a resumed run that broke
 // again within its confirmation: its frames are unconfirmed, where a new run would have taken them) (doc/results.md
 // "A run resumes", "A run reaches further back").
@@ -182,7 +182,7 @@ TEST(OnlineDetector, GardensPointConfigurationPublishesTrustworthyLoopsDayThenNi
 {
   const Scored s = score(runStream(gardensPointStream("day_right", "night_right"), shipped("gardens_point")), 200, 2);
   EXPECT_GE(s.precision, 0.99) << s.wrong << " wrong of " << s.published;
-  EXPECT_GE(s.recall, 0.5);  // measured 0.915
+  EXPECT_GE(s.recall, 0.5);  // measured 0.910
   RecordProperty("recall", std::to_string(s.recall));
 }
 

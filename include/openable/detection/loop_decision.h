@@ -86,8 +86,8 @@ public:
   /// only where the run becomes consistent (or resumes): counted back from this frame, the frames that may join
   /// (mayJoinLater: the run's first frames, and before them frames not unique enough) or were published (the last of
   /// an earlier run may have broken before they were confirmed) whose matches lie within run_start_tolerance of the
-  /// run's line, passing over at most kMaxSkipped in a row that do not, up to the first frame that may not join or
-  /// the first of more than kMaxSkipped off the line (at most kMaxJoined back). The confirmation joins those it
+  /// run's line, passing over at most kMaxSkipped NotUnique frames in a row that do not, up to the first frame that
+  /// may not join or is off the line otherwise (at most kMaxJoined back). The confirmation joins those it
   /// still holds (published ones that went out are not held). Empty after any other decision.
   const std::vector<size_t>& joinedBefore() const
   {
@@ -102,9 +102,9 @@ public:
   }
   /// The most frames a run reaches back (joinedBefore).
   static constexpr size_t kMaxJoined = 256;
-  /// Frames in a row off the run's line that a reach-back passes over (joinedBefore): a look-alike place for a frame
-  /// or two. Measured on 90 pace streams (doc/results.md), summed recall +1.35 / +2.79 / +3.60 for 14 / 25 / 49 more
-  /// wrong loops at 1 / 2 / 3 frames, all at changing paces or on a 60-frame route at 2.5x.
+  /// Not-unique frames in a row off the run's line that a reach-back passes over (joinedBefore): a look-alike place
+  /// for a frame or two. Measured on 90 pace streams (doc/results.md "A run reaches further back"): summed recall
+  /// +0.26 / +0.49 / +0.54 for 1 / 2 / 14 more wrong loops at 1 / 2 / 3 frames.
   static constexpr size_t kMaxSkipped = 2;
   /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
   /// candidates, fewer than min_candidates, or no rival place: a lone candidate would score 1).
@@ -172,7 +172,8 @@ private:
     int direction;
     uint32_t session;
     bool may_join;
-    bool published;  ///< decided Published: its loop closure may still be pending when the run breaks
+    bool published;   ///< decided Published: its loop closure may still be pending when the run breaks
+    bool not_unique;  ///< decided NotUnique: off a run's line, a look-alike place the reach-back may pass over
   };
   std::deque<Past> past_;
 };

@@ -210,7 +210,7 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
       status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
   const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
   past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join,
-                       status == FrameStatus::Published});
+                       status == FrameStatus::Published, status == FrameStatus::NotUnique});
   if (past_.size() > kMaxJoined + 1)
     past_.pop_front();
   return status;
@@ -328,9 +328,11 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
   // A published frame is counted too: the last ones of a run that broke before they were confirmed are still
   // held (LoopConfirmation), and a run on their line takes them; the ones that went out are not held any more,
   // and the confirmation joins only what it holds.
-  // Up to kMaxSkipped frames in a row off the line (a look-alike place for a frame or two) are passed over, not
-  // joined: GP day_right then day_left, a match 2 or 3 places off at revisit frames 30-31 and 24-25 ended the
-  // reach-back there, with the frames before them on the line.
+  // Up to kMaxSkipped not-unique frames in a row off the line (a look-alike place for a frame or two) are passed
+  // over, not joined: GP day_right then day_left, matches 2 and 3 places off at revisit frames 30-31 ended the
+  // reach-back there, with the frames before them on the line. A frame unique enough but off the line is not a
+  // look-alike place: the run's own sequence disagreed there (a lagging start), and the reach-back ends (passing
+  // over those too joined frames 3 places off at the start of a session continued from a map).
   std::vector<size_t> joined;
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return joined;
@@ -348,7 +350,7 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
       joined.push_back(back);
       skipped = 0;
     }
-    else if (++skipped > kMaxSkipped)
+    else if (!p->not_unique || ++skipped > kMaxSkipped)
       break;
   }
   return joined;
