@@ -172,8 +172,9 @@ private:
     int direction;
     uint32_t session;
     bool may_join;
-    bool published;   ///< decided Published: its loop closure may still be pending when the run breaks
-    bool not_unique;  ///< decided NotUnique: off a run's line, a look-alike place the reach-back may pass over
+    /// As decided: a Published frame's loop closure may still be pending when its run breaks; a NotUnique one off a
+    /// later run's line is a look-alike place the reach-back may pass over.
+    FrameStatus status;
   };
   std::deque<Past> past_;
 };

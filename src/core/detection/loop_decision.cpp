@@ -209,8 +209,7 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
   const bool may_be_late =
       status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
   const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
-  past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join,
-                       status == FrameStatus::Published, status == FrameStatus::NotUnique});
+  past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join, status});
   if (past_.size() > kMaxJoined + 1)
     past_.pop_front();
   return status;
@@ -342,7 +341,7 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
   for (auto p = past_.rbegin(); p != past_.rend() && back < kMaxJoined; ++p)
   {
     ++back;
-    if (!(p->may_join || p->published) || p->direction != previous_direction_ || p->session != previous_session_)
+    if (!(p->may_join || p->status == FrameStatus::Published) || p->direction != previous_direction_ || p->session != previous_session_)
       break;
     const double expected = last - slope * static_cast<double>(back);
     if (std::fabs(static_cast<double>(p->id) - expected) <= options_.run_start_tolerance)
@@ -350,7 +349,7 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
       joined.push_back(back);
       skipped = 0;
     }
-    else if (!p->not_unique || ++skipped > kMaxSkipped)
+    else if (p->status != FrameStatus::NotUnique || ++skipped > kMaxSkipped)
       break;
   }
   return joined;
