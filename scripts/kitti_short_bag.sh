@@ -18,7 +18,11 @@ source "$ws/devel/setup.bash"
 port=$((12000 + RANDOM % 1000))
 export ROS_MASTER_URI=http://127.0.0.1:$port
 pids=()
-cleanup() { for pid in "${pids[@]}"; do kill -INT "$pid" 2> /dev/null; done; wait 2> /dev/null; }
+cleanup() {
+  for pid in "${pids[@]}"; do kill -INT "$pid" 2> /dev/null; done
+  wait 2> /dev/null
+  rm -f "${counts:-}"
+}
 trap cleanup EXIT
 roscore -p "$port" > /dev/null 2>&1 & pids+=($!)
 sleep 3
@@ -29,19 +33,18 @@ roslaunch openable_ros kitti.launch bag:=none stereo:=false fixed_frame:=none po
   queue_size:=200 "$@" > "$root/build/kitti_short_bag.log" 2>&1 & pids+=($!)
 counts=$(mktemp)
 ROS_NAMESPACE=kitti /usr/bin/python3 "$root/scripts/count_decisions.py" _idle:=8 _timeout:=180 > "$counts" &
-counter=$!
-# The bag is played only once every frame has a listener: a fixed delay lost the first frame when the
-# machine was busy (159 decisions of 160). The counter registers on /kitti/decisions; rosbag play waits for
-# the detector's subscriptions itself (--wait-for-subscribers on the two topics the mono detector reads).
-for _ in $(seq 1 300); do
-  rostopic info /kitti/decisions 2> /dev/null | sed -n '/Subscribers:/,$p' | grep -q count_decisions && break
+counter=$! && pids+=($!)
+# The bag is played only once every frame has a listener (a fixed delay may lose the first frame on a busy
+# machine): the counter must be registered on /kitti/decisions, and rosbag play waits for the detector's
+# subscriptions itself (--wait-for-subscribers on the two topics the mono detector reads).
+counter_listens() { rostopic info /kitti/decisions 2> /dev/null | sed -n '/Subscribers:/,$p' | grep -q count_decisions; }
+deadline=$((SECONDS + 60))
+until counter_listens; do
+  [ $SECONDS -lt $deadline ] || { echo "count_decisions did not subscribe to /kitti/decisions within 60 s" >&2; exit 1; }
   sleep 0.2
 done
-rostopic info /kitti/decisions 2> /dev/null | sed -n '/Subscribers:/,$p' | grep -q count_decisions ||
-  { echo "count_decisions did not subscribe to /kitti/decisions within 60 s" >&2; exit 1; }
 timeout 150 rosbag play --clock --quiet --delay=1 --wait-for-subscribers \
   --topics /kitti/left/image_rect /kitti/left/camera_info --bags="$bag" > "$root/build/kitti_short_bag_play.log" 2>&1 ||
   { echo "rosbag play failed: see $root/build/kitti_short_bag_play.log" >&2; exit 1; }
 wait "$counter"
 cat "$counts"
-rm -f "$counts"
