@@ -275,6 +275,42 @@ TEST(LoopDecisionAtAnyPace, RefusesAHubAStallAndAPaceOutsideTheRange)
     EXPECT_NE(fast.decide(at(100 + 10 * k)), FrameStatus::Published) << k;  // 10x: no loop rather than a wrong one
 }
 
+TEST(LoopDecisionAtAnyPace, AMatchPressedAgainstTheExclusionWindowStartsNoRunButAPublishedRunGoesOn)
+{
+  // edge: the newest place compared (the ones after it are inside the exclusion window).
+  const auto withEdge = [](uint64_t match, uint64_t edge)
+  {
+    Detection d = at(match);
+    d.has_exclusion_edge = true;
+    d.exclusion_edge_id = edge;
+    return d;
+  };
+  // A sequence that follows the edge one place a frame, as the edge advances (a revisit that caught up with its
+  // recent past): unique and consistent, never a loop.
+  LoopDecision pressed(decisionAtAnyPace());
+  for (int k = 0; k < 10; ++k)
+    EXPECT_EQ(pressed.decide(withEdge(150 + k, 150 + k)), FrameStatus::Excluded) << k;
+  // One place short of it is not.
+  LoopDecision clear(decisionAtAnyPace());
+  for (int k = 0; k < 4; ++k)
+    clear.decide(withEdge(149 + k, 150 + k));
+  EXPECT_EQ(clear.decide(withEdge(153, 154)), FrameStatus::Published);
+  // Another session's edge says nothing about this one.
+  Detection other = withEdge(154, 154);
+  other.exclusion_edge_session = 1;
+  EXPECT_EQ(clear.decide(other), FrameStatus::Published);
+  // A published run that reaches the edge from behind (a revisit at 2x) goes on with it.
+  LoopDecision reaching(decisionAtAnyPace());
+  for (int k = 0; k < 4; ++k)
+    reaching.decide(withEdge(140 + 2 * k, 150 + k));
+  ASSERT_EQ(reaching.decide(withEdge(148, 154)), FrameStatus::Published);
+  EXPECT_EQ(reaching.decide(withEdge(150, 155)), FrameStatus::Published);
+  EXPECT_EQ(reaching.decide(withEdge(152, 156)), FrameStatus::Published);
+  EXPECT_EQ(reaching.decide(withEdge(154, 157)), FrameStatus::Published);
+  EXPECT_EQ(reaching.decide(withEdge(156, 158)), FrameStatus::Published);
+  EXPECT_EQ(reaching.decide(withEdge(158, 158)), FrameStatus::Published);
+}
+
 namespace
 {
 Config shippedAtAnyPace(const std::string& name)
@@ -310,6 +346,25 @@ PacedStream pacedStream(const std::string& first, const std::string& second, con
   {
     s.frames.push_back(frame(second, i));
     s.place.push_back(i);
+  }
+  return s;
+}
+
+/// A short route: frames [begin, begin + count) of `first`, then `second`'s frames at `indices` (begin + offset);
+/// place[i] is the id of the first traversal's frame that frame i shows.
+PacedStream shortRoute(const std::string& first, const std::string& second, int begin, int count,
+                       const std::vector<int>& offsets)
+{
+  PacedStream s;
+  for (int i = 0; i < count; ++i)
+  {
+    s.frames.push_back(openable_test::gardensPoint(first, begin + i));
+    s.place.push_back(-1);
+  }
+  for (int offset : offsets)
+  {
+    s.frames.push_back(openable_test::gardensPoint(second, begin + offset));
+    s.place.push_back(offset);
   }
   return s;
 }
@@ -393,6 +448,24 @@ TEST(PacedStreams, TwiceAndHalfThePaceAndLongStopsPublishOnlyRightLoops)
   const Published stopped = run(pacedStream("day_right", "night_right", stops), config);
   EXPECT_EQ(stopped.wrong, 0);
   EXPECT_EQ(stopped.stored, same.stored);
+}
+
+TEST(PacedStreams, AShortRouteDrivenAgainFasterPublishesNoLoopWithTheExclusionWindowsEdge)
+{
+  // Gardens Point day_right frames 140-199, then night_right 140-199: at 1.5x the revisit catches up with its
+  // own recent past (from its 36th frame the place it shows was seen fewer than exclusion_window frames ago).
+  // Before the rule, the best sequence followed the edge of the window and published 6 loops there, all wrong.
+  const Config config = shippedAtAnyPace("default");
+  std::vector<int> same, faster;
+  for (int i = 0; i < 60; ++i)
+    same.push_back(i);
+  for (int i = 0; i * 3 / 2 < 60; ++i)
+    faster.push_back(i * 3 / 2);
+  const Published at_pace = run(shortRoute("day_right", "night_right", 140, 60, same), config);
+  EXPECT_EQ(at_pace.wrong, 0);
+  EXPECT_GE(at_pace.recall, 0.5);  // measured 0.717
+  const Published fast = run(shortRoute("day_right", "night_right", 140, 60, faster), config);
+  EXPECT_EQ(fast.wrong, 0) << "published " << fast.published;
 }
 
 TEST(PacedStreams, AStreamThatNeverMovesStoresOnePlaceAndPublishesNothing)

@@ -118,6 +118,8 @@ public:
 
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
+  /// The best match is the newest place compared: the exclusion window's edge.
+  bool pressedAgainstExclusion(const Detection& detection) const;
   /// The distance gate is set and the best match fails it.
   bool aboveThreshold(const Detection& detection) const;
   /// Geometry may stand in for the rule the frame failed, `why`: the uniqueness gate or the minimum of places.

@@ -37,6 +37,11 @@ struct Detection
   /// matchUniqueness (loop_decision.h) of the best and the second best place (outside uniqueness_window).
   /// Whether the frame passes the gates is LoopDecision's to say.
   float uniqueness = 0.0f;
+  /// Where the exclusion cut the query's own session: the newest of its places that was compared (the ones
+  /// after it are inside the exclusion window). Unset when the exclusion cut nothing, or in localisation.
+  bool has_exclusion_edge = false;
+  uint32_t exclusion_edge_session = 0;
+  uint64_t exclusion_edge_id = 0;
 };
 
 /// Detection::excluded: no candidate, the query's own past is stored but all of it inside the exclusion

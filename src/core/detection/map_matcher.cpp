@@ -130,6 +130,12 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     const PlaceDatabase& frames = map.frames(s);
     const size_t columns = candidateColumns(frames, own, stamp);
     detection.own_excluded = detection.own_excluded || (own && columns == 0 && !frames.empty());
+    if (own && columns > 0 && columns < frames.size())
+    {
+      detection.has_exclusion_edge = true;
+      detection.exclusion_edge_session = s;
+      detection.exclusion_edge_id = frames.firstId() + columns - 1;
+    }
     RowMatcher& matcher = *matchers_[s];
     matcher.match(query.data(), frames, columns);
     detection.candidates += matcher.smallestDistinct(wanted, window, minTerms(), taken_);
