@@ -20,7 +20,8 @@ enum class FrameStatus
   Standstill,          ///< not stored: the image is the last stored one again (the camera stands still)
   TimeJump,            ///< not stored: its stamp is earlier than the previous frame's
   TooEarly,            ///< fewer than min_candidates places with a long enough sequence to compare with
-  Excluded,            ///< history exists, but every frame of it is inside the exclusion (frames or seconds)
+  Excluded,            ///< history exists, but every frame of it is inside the exclusion (frames or seconds), or
+                       ///< the best match is the exclusion's edge (the newest place compared) and starts no run
   AboveThreshold,      ///< best normalised distance > threshold
   NotUnique,           ///< uniqueness (1 - best / second best) < min_uniqueness, or no gate is set at all
   Inconsistent,        ///< fewer than consistent_frames consecutive frames agree on where the loop is
