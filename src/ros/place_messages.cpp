@@ -51,6 +51,8 @@ PlaceCandidatesPtr toMsg(const std_msgs::Header& header, const openable::ServerC
   msg->query_pose = poseOrIdentity(a.has_query_pose, a.query_pose);
   msg->candidates = uint32_t(a.candidates);
   msg->own_excluded = a.own_excluded;
+  msg->has_own_edge = a.has_own_edge;
+  msg->own_edge_id = a.own_edge_id;
   msg->other_frames = uint32_t(a.other_frames);
   for (const openable::ServerCandidate& c : a.top)
   {
@@ -83,6 +85,8 @@ openable::ServerCandidates fromMsg(const PlaceCandidates& msg)
   a.query_pose = toPose(msg.query_pose);
   a.candidates = msg.candidates;
   a.own_excluded = msg.own_excluded;
+  a.has_own_edge = msg.has_own_edge;
+  a.own_edge_id = msg.own_edge_id;
   a.other_frames = msg.other_frames;
   for (const PlaceCandidate& m : msg.top)
   {

@@ -76,6 +76,10 @@ struct ServerCandidates
   size_t candidates = 0;      ///< places compared with a sequence long enough to be a candidate
   std::vector<ServerCandidate> top;  ///< best first, up to max(top_k, 2) distinct places
   bool own_excluded = false;  ///< the query's own past is here but all of it inside the exclusion
+  /// The exclusion cut the query's own past here: own_edge_id is the newest of its places compared (a match
+  /// there starts no run, LoopDecision).
+  bool has_own_edge = false;
+  uint64_t own_edge_id = 0;
   size_t other_frames = 0;    ///< frames held here in sessions other than the query's
 };
 

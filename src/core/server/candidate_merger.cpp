@@ -51,6 +51,12 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
     all.insert(all.end(), a.top.begin(), a.top.end());
     d.candidates += a.candidates;
     d.own_excluded = d.own_excluded || a.own_excluded;
+    if (a.has_own_edge)  // only the server that holds the query's session cuts it
+    {
+      d.has_exclusion_edge = true;
+      d.exclusion_edge_session = sessionIndex(out.query_session);
+      d.exclusion_edge_id = a.own_edge_id;
+    }
     other_frames += a.other_frames;
     if (a.stored)
     {

@@ -188,6 +188,8 @@ ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
   {
     const PlaceDatabase& frames = map_.frames(uint32_t(own));
     out.own_excluded = detection.own_excluded;  // MapMatcher's exclusion: frames exist, none outside it
+    out.has_own_edge = detection.has_exclusion_edge;
+    out.own_edge_id = detection.exclusion_edge_id;
     out.other_frames -= frames.size();
   }
   if (owned)
