@@ -350,7 +350,7 @@ PacedStream pacedStream(const std::string& first, const std::string& second, con
   return s;
 }
 
-/// A short route: frames [begin, begin + count) of `first`, then `second`'s frames at `indices` (begin + offset);
+/// A short route: frames [begin, begin + count) of `first`, then `second`'s frames begin + offset for each of `offsets`;
 /// place[i] is the id of the first traversal's frame that frame i shows.
 PacedStream shortRoute(const std::string& first, const std::string& second, int begin, int count,
                        const std::vector<int>& offsets)
@@ -453,7 +453,7 @@ TEST(PacedStreams, TwiceAndHalfThePaceAndLongStopsPublishOnlyRightLoops)
 TEST(PacedStreams, AShortRouteDrivenAgainFasterPublishesNoLoopWithTheExclusionWindowsEdge)
 {
   // Gardens Point day_right frames 140-199, then night_right 140-199: at 1.5x the revisit catches up with its
-  // own recent past (from its 36th frame the place it shows was seen fewer than exclusion_window frames ago).
+  // own recent past (from about its 20th frame the place it shows was seen fewer than exclusion_window frames ago).
   // Before the rule, the best sequence followed the edge of the window and published 6 loops there, all wrong.
   const Config config = shippedAtAnyPace("default");
   std::vector<int> same, faster;
