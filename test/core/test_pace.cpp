@@ -326,7 +326,10 @@ struct PacedStream
   std::vector<int> place;
 };
 
-PacedStream pacedStream(const std::string& first, const std::string& second, const std::vector<int>& indices)
+/// Frames [begin, begin + count) of `first`, then `second`'s frames begin + offset for each of `offsets`;
+/// place[i] is the id of the first traversal's frame that frame i shows.
+PacedStream routeStream(const std::string& first, const std::string& second, int begin, int count,
+                        const std::vector<int>& offsets)
 {
   static std::map<std::string, cv::Mat> cache;
   const auto frame = [](const std::string& traversal, int i) -> cv::Mat
@@ -337,36 +340,22 @@ PacedStream pacedStream(const std::string& first, const std::string& second, con
     return m;
   };
   PacedStream s;
-  for (int i = 0; i < 200; ++i)
-  {
-    s.frames.push_back(frame(first, i));
-    s.place.push_back(-1);
-  }
-  for (int i : indices)
-  {
-    s.frames.push_back(frame(second, i));
-    s.place.push_back(i);
-  }
-  return s;
-}
-
-/// A short route: frames [begin, begin + count) of `first`, then `second`'s frames begin + offset for each of `offsets`;
-/// place[i] is the id of the first traversal's frame that frame i shows.
-PacedStream shortRoute(const std::string& first, const std::string& second, int begin, int count,
-                       const std::vector<int>& offsets)
-{
-  PacedStream s;
   for (int i = 0; i < count; ++i)
   {
-    s.frames.push_back(openable_test::gardensPoint(first, begin + i));
+    s.frames.push_back(frame(first, begin + i));
     s.place.push_back(-1);
   }
   for (int offset : offsets)
   {
-    s.frames.push_back(openable_test::gardensPoint(second, begin + offset));
+    s.frames.push_back(frame(second, begin + offset));
     s.place.push_back(offset);
   }
   return s;
+}
+
+PacedStream pacedStream(const std::string& first, const std::string& second, const std::vector<int>& indices)
+{
+  return routeStream(first, second, 0, 200, indices);
 }
 
 struct Published
@@ -461,10 +450,10 @@ TEST(PacedStreams, AShortRouteDrivenAgainFasterPublishesNoLoopWithTheExclusionWi
     same.push_back(i);
   for (int i = 0; i * 3 / 2 < 60; ++i)
     faster.push_back(i * 3 / 2);
-  const Published at_pace = run(shortRoute("day_right", "night_right", 140, 60, same), config);
+  const Published at_pace = run(routeStream("day_right", "night_right", 140, 60, same), config);
   EXPECT_EQ(at_pace.wrong, 0);
   EXPECT_GE(at_pace.recall, 0.5);  // measured 0.717
-  const Published fast = run(shortRoute("day_right", "night_right", 140, 60, faster), config);
+  const Published fast = run(routeStream("day_right", "night_right", 140, 60, faster), config);
   EXPECT_EQ(fast.wrong, 0) << "published " << fast.published;
 }
 
