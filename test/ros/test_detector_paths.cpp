@@ -15,7 +15,6 @@
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <tf2/LinearMath/Quaternion.h>
-#include <tf2_ros/transform_broadcaster.h>
 #include <sensor_msgs/NavSatFix.h>
 
 #include <algorithm>
@@ -33,6 +32,7 @@
 
 #include "openable/view/trajectory_export.h"
 #include "test_helpers.h"
+#include "tf_sender.h"
 
 using openable_ros_test::DiagnosticsWatcher;
 using openable_ros_test::waitFor;
@@ -150,9 +150,10 @@ TEST(DetectorPaths, KeyframeAngleStoresAFrameEveryHalfRadianOfTurn)
   ros::NodeHandle pnh("~");
   const std::string dir = pnh.param<std::string>("data_dir", OPENABLE_SOURCE_DIR "/../shared/data/gardens_point");
   DiagnosticsWatcher diagnostics(nh);
-  tf2_ros::TransformBroadcaster broadcaster;
+  openable_ros_test::TfSender tf(nh);
   ros::Publisher pub = nh.advertise<sensor_msgs::Image>("image", 100);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }, 30.0));
+  ASSERT_TRUE(tf.waitForListener(30.0)) << "the detector's tf listener did not connect within 30 s";
 
   ros::Time stamp(500.0);
   int published = 0;
@@ -170,7 +171,7 @@ TEST(DetectorPaths, KeyframeAngleStoresAFrameEveryHalfRadianOfTurn)
     t.transform.rotation.y = q.y();
     t.transform.rotation.z = q.z();
     t.transform.rotation.w = q.w();
-    broadcaster.sendTransform(t);
+    tf.send(t);
     ros::WallDuration(0.03).sleep();
     pub.publish(openable_ros_test::toMsg(gardensPoint(dir, image_index), enc::BGR8, stamp, "camera"));
     ++published;

@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 #include <openable_ros/LoopClosure.h>
 #include <ros/ros.h>
-#include <tf2_ros/transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <cstdio>
@@ -14,6 +13,7 @@
 #include <vector>
 
 #include "test_helpers.h"
+#include "tf_sender.h"
 
 using openable_ros_test::DiagnosticsWatcher;
 using openable_ros_test::waitFor;
@@ -44,11 +44,12 @@ TEST(DetectorTf, PosesFromTfAndKeyframesByDistance)
   ros::NodeHandle pnh("~");
   const std::string dir = pnh.param<std::string>("data_dir", OPENABLE_SOURCE_DIR "/../shared/data/gardens_point");
   DiagnosticsWatcher diagnostics(nh);
-  tf2_ros::TransformBroadcaster broadcaster;
+  openable_ros_test::TfSender tf(nh);
   ros::Publisher pub = nh.advertise<sensor_msgs::Image>("image", 100);
   ros::Subscriber loop_sub = nh.subscribe("loop_closures", 100, loopCallback);
   ros::Subscriber marker_sub = nh.subscribe("loop_markers", 10, markersCallback);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && loop_sub.getNumPublishers() > 0; }, 30.0));
+  ASSERT_TRUE(tf.waitForListener(30.0)) << "the detector's tf listener did not connect within 30 s";
 
   // The camera walks along x at 0.5 m per frame over images 0..39 (20 keyframes), stands still for 10
   // frames (no keyframe), then walks the same path again 5 m to the side (y = 5): the second walk revisits
@@ -65,7 +66,7 @@ TEST(DetectorTf, PosesFromTfAndKeyframesByDistance)
     t.transform.translation.x = x;
     t.transform.translation.y = y;
     t.transform.rotation.w = 1.0;
-    broadcaster.sendTransform(t);
+    tf.send(t);
     ros::WallDuration(0.03).sleep();
     char path[1024];
     std::snprintf(path, sizeof(path), "%s/day_right/Image%03d.jpg", dir.c_str(), image_index);

@@ -10,7 +10,6 @@
 #include <gtest/gtest.h>
 #include <openable_ros/LoopClosure.h>
 #include <ros/ros.h>
-#include <tf2_ros/transform_broadcaster.h>
 
 #include <cstdio>
 #include <map>
@@ -19,6 +18,7 @@
 #include <vector>
 
 #include "test_helpers.h"
+#include "tf_sender.h"
 
 using openable_ros_test::DiagnosticsWatcher;
 using openable_ros_test::waitFor;
@@ -86,11 +86,15 @@ TEST(MonoDetectorPace, StandstillAndDoubleSpeedPublishOnlyRightLoops)
 
   LoopRecorder recorder;
   DiagnosticsWatcher diagnostics(nh);
-  tf2_ros::TransformBroadcaster broadcaster;
+  openable_ros_test::TfSender tf(nh);
   ros::Publisher image_pub = nh.advertise<sensor_msgs::Image>("image", 100);
   ros::Subscriber loop_sub = nh.subscribe("loop_closures", 10000, &LoopRecorder::loop, &recorder);
   ASSERT_TRUE(waitFor([&] { return image_pub.getNumSubscribers() > 0 && loop_sub.getNumPublishers() > 0; }, 30.0))
       << "the detector did not subscribe to 'image' / advertise 'loop_closures' within 30 s";
+  if (odometry)
+  {
+    ASSERT_TRUE(tf.waitForListener(30.0)) << "the detector's tf listener did not connect within 30 s";
+  }
 
   const std::vector<StreamFrame> stream = paceStream(frames, step, stop_image, stop_frames);
   std::map<ros::Time, size_t> index_of_stamp;
@@ -110,7 +114,7 @@ TEST(MonoDetectorPace, StandstillAndDoubleSpeedPublishOnlyRightLoops)
       t.child_frame_id = "camera";
       t.transform.translation.x = frame.image;
       t.transform.rotation.w = 1.0;
-      broadcaster.sendTransform(t);
+      tf.send(t);
     }
     char path[1024];
     std::snprintf(path, sizeof(path), "%s/%s/Image%03d.jpg", data_dir.c_str(), frame.night ? "night_right" : "day_right",
