@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""Recall and wrong loops at every steady pace from 1.0x to 2.9x, not only at the profiles' few factors.
+
+  scripts/pace_sweep.py --out DIR [--config FILE.yaml] [--bin DIR] [--set key=value]... [--jobs N]
+
+The matcher follows 17 paces (1.15^k, 1/3x to 3x); a revisit at a pace between two of them is followed by
+slips, and its recall depends on where its pace falls. The fixed profiles of scripts/pace_eval.py (2x, 2.5x,
+...) land on or near some of those paces, so a change of the matcher or of its paces is judged here, on a pace
+grid that knows nothing of them: Gardens Point day_right then night_right and day_right then day_left at
+1.0x, 1.1x, ..., 2.9x; Nordland summer then winter at every second factor; and the revisit slower than the
+first pass (the first traversal at 1.2x ... 2.7x, the second at 1x: repeated frames would be a standstill).
+62 streams; prints a markdown table (recall, wrong loops in brackets) and the totals, published / wrong /
+summed recall, over all streams and over the 40 whose factor none of 1.0x, 1.5x, 2.0x, 2.5x is.
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(HERE, '..', '..', 'shared', 'data')
+FACTORS = ['%.1fx' % (1 + 0.1 * k) for k in range(20)]
+ROUND_FACTORS = {'1.0x', '1.5x', '2.0x', '2.5x'}
+LINE = re.compile(r'(\S+)\s+frames\s+\d+\s+published\s+(\d+)\s+wrong\s+(\d+)\s+precision\s+\S+\s+recall\s+(\S+)')
+
+
+def streams():
+    """(label, first, second, tolerance, second-traversal profiles, first-traversal profile)."""
+    gp = os.path.join(DATA, 'gardens_point')
+    nl = os.path.join(DATA, 'nordland')
+    out = [('GP day_right then night_right', gp + '/day_right', gp + '/night_right', 2, FACTORS, '1x'),
+           ('GP day_right then day_left', gp + '/day_right', gp + '/day_left', 2, FACTORS, '1x'),
+           ('Nordland summer then winter', nl + '/summer', nl + '/winter', 1, FACTORS[::2], '1x')]
+    for first_pace in FACTORS[2::3]:
+        out.append(('GP day_right then night_right, first pass at ' + first_pace, gp + '/day_right',
+                    gp + '/night_right', 2, ['1x'], first_pace))
+        out.append(('GP day_right then day_left, first pass at ' + first_pace, gp + '/day_right', gp + '/day_left',
+                    2, ['1x'], first_pace))
+    return out
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--out', required=True)
+    parser.add_argument('--config', default=os.path.join(HERE, '..', 'config', 'default.yaml'))
+    parser.add_argument('--bin', default=os.path.join(HERE, '..', 'build', 'ws', 'devel', 'lib', 'openable_ros'))
+    parser.add_argument('--set', action='append', default=[])
+    parser.add_argument('--jobs', type=int, default=2)
+    args = parser.parse_args()
+    results = []  # (label, factor, published, wrong, recall)
+    for index, (label, first, second, tolerance, profiles, first_pace) in enumerate(streams()):
+        command = [sys.executable, os.path.join(HERE, 'pace_eval.py'), '--bin', args.bin, '--jobs', str(args.jobs),
+                   '--first', first, '--second', second, '--tolerance', str(tolerance), '--config', args.config,
+                   '--first-profile', first_pace, '--out', os.path.join(args.out, 'stream%02d' % index)]
+        for key_value in args.set:
+            command += ['--set', key_value]
+        for profile in profiles:
+            command += ['--profile', profile]
+        run = subprocess.run(command, capture_output=True, text=True)
+        if run.returncode != 0:
+            sys.exit('pace_sweep: %s failed:\n%s' % (label, run.stderr[-2000:]))
+        for line in run.stdout.splitlines():
+            match = LINE.match(line)
+            if match:
+                factor = match.group(1) if first_pace == '1x' else '1/' + first_pace
+                results.append((label, factor, int(match.group(2)), int(match.group(3)), float(match.group(4))))
+    fast = [r for r in results if not r[1].startswith('1/')]
+    print('| stream | ' + ' | '.join(f[:-1] for f in FACTORS) + ' |')
+    print('|---|' + '---:|' * len(FACTORS))
+    for label in dict.fromkeys(r[0] for r in fast):
+        cell = {r[1]: '%.2f%s' % (r[4], ' (%d)' % r[3] if r[3] else '') for r in fast if r[0] == label}
+        print('| %s | %s |' % (label, ' | '.join(cell.get(f, '') for f in FACTORS)))
+    for r in results:
+        if r[1].startswith('1/'):
+            print('%s: published %d, wrong %d, recall %.3f' % (r[0], r[2], r[3], r[4]))
+
+    def total(rows):
+        return '%d streams, published %d / wrong %d / summed recall %.2f' % (
+            len(rows), sum(r[2] for r in rows), sum(r[3] for r in rows), sum(r[4] for r in rows))
+
+    print('all: ' + total(results))
+    print('between round factors: ' + total([r for r in fast if r[1] not in ROUND_FACTORS]))
+
+
+if __name__ == '__main__':
+    main()
