@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Recall and wrong loops at every steady pace from 1.0x to 2.9x, not only at the profiles' few factors.
 
-  scripts/pace_sweep.py --out DIR [--config FILE.yaml] [--bin DIR] [--set key=value]... [--jobs N]
+  scripts/pace_sweep.py --out DIR [--config FILE.yaml] [--bin DIR] [--set key=value]... [--jobs N] [--plot FILE.png]
 
 The matcher follows 17 paces (1.15^k, 1/3x to 3x); a revisit at a pace between two of them is followed by
 slips, and its recall depends on where its pace falls. The fixed profiles of scripts/pace_eval.py (2x, 2.5x,
@@ -10,11 +10,13 @@ grid that knows nothing of them: Gardens Point day_right then night_right and da
 1.0x, 1.1x, ..., 2.9x; Nordland summer then winter at every second factor; and the revisit slower than the
 first pass (the first traversal at 1.2x ... 2.7x, the second at 1x: repeated frames would be a standstill).
 62 streams; prints a markdown table (recall, wrong loops in brackets) and the totals, published / wrong /
-summed recall, over all streams and over the 40 whose factor none of 1.0x, 1.5x, 2.0x, 2.5x is.
+summed recall, over all streams and over the 40 whose factor none of 1.0x, 1.5x, 2.0x, 2.5x is. --plot draws
+recall and precision against the pace, with the paces followed, through gnuplot (apt-get install gnuplot-nox).
 """
 import argparse
 import os
 import re
+import shutil
 import subprocess
 import sys
 
@@ -40,6 +42,36 @@ def streams():
     return out
 
 
+def plot(results, out, png):
+    """Recall (lines) and precision (circles; 1 where nothing was published) of each fast stream against its pace."""
+    if not shutil.which('gnuplot'):
+        sys.exit('pace_sweep: --plot needs gnuplot (apt-get install gnuplot-nox)')
+    labels = list(dict.fromkeys(r[0] for r in results if not r[1].startswith('1/')))
+    series = []
+    for index, label in enumerate(labels):
+        data = os.path.join(out, 'sweep%d.dat' % index)
+        with open(data, 'w') as f:
+            for r in results:
+                if r[0] == label and not r[1].startswith('1/'):
+                    f.write('%s %.4f %.4f\n' % (r[1][:-1], r[4], (r[2] - r[3]) / r[2] if r[2] else 1.0))
+        series.append((data, label.replace('_', '\\_')))
+    colours = ['#1f77b4', '#d62728', '#2ca02c']
+    lines = ['set terminal pngcairo size 900,560 font "DejaVu Sans,11"', "set output '%s'" % png,
+             'set title "recall (lines), precision (circles), dashed: the paces followed"',
+             'set xlabel "pace of the second traversal (x the first pass\'s)"',
+             'set ylabel "recall / precision of the published set"', 'set xrange [0.95:2.95]', 'set yrange [0:1.05]',
+             'set key bottom left', 'set grid ytics',
+             # The paces PaceMatcher follows: 1.15^k in sixtieths of a place a frame.
+             'do for [k=0:8] { p = floor(1.15**k * 60 + 0.5) / 60.0; if (p <= 2.95) '
+             '{ set arrow from p, graph 0 to p, graph 1 nohead lc rgb "#bbbbbb" dt 2 } }']
+    plots = []
+    for (data, label), colour in zip(series, colours):
+        plots.append("'%s' u 1:2 w lp lw 2 pt 7 ps 0.8 lc rgb '%s' t '%s, recall'" % (data, colour, label))
+        plots.append("'%s' u 1:3 w p pt 6 ps 1.2 lc rgb '%s' notitle" % (data, colour))
+    lines.append('plot ' + ', '.join(plots))
+    subprocess.run(['gnuplot'], input='\n'.join(lines) + '\n', text=True, check=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('--out', required=True)
@@ -47,6 +79,7 @@ def main():
     parser.add_argument('--bin', default=os.path.join(HERE, '..', 'build', 'ws', 'devel', 'lib', 'openable_ros'))
     parser.add_argument('--set', action='append', default=[])
     parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--plot', default='')
     args = parser.parse_args()
     results = []  # (label, factor, published, wrong, recall)
     for index, (label, first, second, tolerance, profiles, first_pace) in enumerate(streams()):
@@ -81,6 +114,8 @@ def main():
 
     print('all: ' + total(results))
     print('between round factors: ' + total([r for r in fast if r[1] not in ROUND_FACTORS]))
+    if args.plot:
+        plot(results, args.out, args.plot)
 
 
 if __name__ == '__main__':
