@@ -88,7 +88,7 @@ struct Config
   double pace_penalty = 3.0;    ///< PaceMatcher: cost of a change of pace, in standard deviations of a
                                 ///< sequence's distance under noise
   double slip_penalty = 0.35;   ///< PaceMatcher: cost of a sequence moving one place off its line in a frame, as a
-                                ///< fraction of pace_penalty (0 = never)
+                                ///< fraction of pace_penalty (0 = never); divided by sqrt(pace) on a line above 1x
   int pace_tolerance = 0;       ///< PaceMatcher: places a sequence may be off its line in each frame (0..2)
   double standstill_distance = 0.002;  ///< a frame this close (normalised) to the last stored one is the camera
                                      ///< standing still: not stored, not matched (0 = off)

@@ -76,7 +76,8 @@ public:
           float off = oldCost(from + further, v);
           if (step != 0)
             off = std::min(off, oldCost(from - further, v));
-          path = std::min(path, off + slip_ * change);
+          // Cheaper on a fast line (PaceMatcher's slipCost): divided by the square root of the pace above 1x.
+          path = std::min(path, off + slip_ * change / std::sqrt(std::max(1.0f, float(std::abs(p)) / float(q))));
         }
         costs[j][v] = (1.0f - keep) * d[j] + keep * path;
         best[j] = std::min(best[j], costs[j][v]);

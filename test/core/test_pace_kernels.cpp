@@ -77,9 +77,14 @@ public:
     const int32_t a = std::min<int32_t>(32767, static_cast<int32_t>(std::lround(double(keep) * 32768.0)));
     const float scale = static_cast<float>((32768.0 - a) / 32768.0 * kOne / max_distance);
     const int32_t change_fixed = static_cast<int32_t>(std::min<double>(kOne, std::round(double(change) * kOne)));
-    const int32_t slip_fixed =
-        slip_ > 0.0f ? static_cast<int32_t>(std::min<double>(kOne, std::round(double(slip_) * double(change) * kOne)))
-                     : -1;
+    // A slip costs slip_ of a change of pace, divided by the square root of the line's pace above 1x.
+    const auto slipFixed = [&](int p, int q)
+    {
+      const double pace = std::max(1.0, double(std::abs(p)) / q);
+      return slip_ > 0.0f ? static_cast<int32_t>(
+                                std::min<double>(kOne, std::round(double(slip_) * double(change) * kOne / std::sqrt(pace))))
+                          : -1;
+    };
     const auto entry = [scale](uint32_t r)
     { return static_cast<int32_t>(std::nearbyint(std::min(float(int32_t(r)) * scale, float(kOne)))); };
     const auto oldCost = [&](long j, size_t v)
@@ -96,6 +101,7 @@ public:
         const long step = long((t_ + 1) * std::abs(p) / q) - long(t_ * std::abs(p) / q);
         const long from = long(j) - (p > 0 ? step : -step);
         int32_t path = std::min<int32_t>(oldCost(from, v), saturated(oldBest(from) + change_fixed));
+        const int32_t slip_fixed = slipFixed(p, q);
         if (slip_fixed >= 0)
         {
           // One place further along the line (behind forward, ahead reverse) or, where it advances, one fewer.

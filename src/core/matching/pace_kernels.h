@@ -28,6 +28,7 @@ struct PaceRow
   const int16_t* from;  ///< previous frame's costs, indexed by place in the chunk; valid from -pad to m + pad
   int16_t* to;          ///< this frame's costs, indexed by place in the chunk
   long offset;          ///< where the path comes from: -step (forward) or +step (reverse)
+  int16_t slip;         ///< the cost of a slip off this line (Chunk::slip >= 0); the faster the line, the less
 };
 
 /// One chunk of places [begin, begin + m) of a frame.
@@ -44,7 +45,8 @@ struct Chunk
   int16_t change;     ///< the cost of a change of pace
   /// The cost of a path moving one place off its line in a frame (one place further, or one fewer where the line
   /// advances), so a revisit between two of the paces followed, or drifting from one to the next, is followed
-  /// without a change of pace; -1: never (the slip_penalty 0 of the configuration).
+  /// without a change of pace; -1: never (the slip_penalty 0 of the configuration). Else each row has its own
+  /// (PaceRow::slip).
   int16_t slip;
   const int16_t* old_best;  ///< M of the previous frame, indexed by place; valid from -pad to n + pad
   int16_t* best;            ///< M of this frame, indexed by place
@@ -150,7 +152,7 @@ inline void update(const Chunk& c, size_t i, ChunkSums& sums)
     const long from = static_cast<long>(i) + row.offset;
     int16_t path = std::min(row.from[from], addSaturated(c.old_best[static_cast<long>(j) + row.offset], c.change));
     if (c.slip >= 0)
-      path = std::min(path, addSaturated(offLine(row, from), c.slip));
+      path = std::min(path, addSaturated(offLine(row, from), row.slip));
     const int16_t cost = addSaturated(c.entry[i], scaled(path, c.keep));
     row.to[i] = cost;
     best = std::min(best, cost);

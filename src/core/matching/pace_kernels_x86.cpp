@@ -145,10 +145,10 @@ template <bool kSlip>
 __attribute__((target("avx512f,avx512bw"))) inline void paces512(const Chunk& c, int16_t* best, size_t whole,
                                                                  __mmask32 top, __m512i keep)
 {
-  const __m512i slip = _mm512_set1_epi16(kSlip ? c.slip : 0);
   for (size_t v = 0; v < c.paces; ++v)
   {
     const PaceRow& row = c.rows[v];
+    const __m512i slip = _mm512_set1_epi16(kSlip ? row.slip : 0);
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
     if (row.from == row.to)
       forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip);
@@ -196,10 +196,10 @@ __attribute__((target("avx2"))) inline void pace256(const int16_t* from, int16_t
 template <bool kSlip>
 __attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* best, size_t whole, __m256i keep)
 {
-  const __m256i slip = _mm256_set1_epi16(kSlip ? c.slip : 0);
   for (size_t v = 0; v < c.paces; ++v)
   {
     const PaceRow& row = c.rows[v];
+    const __m256i slip = _mm256_set1_epi16(kSlip ? row.slip : 0);
     const int16_t* from = row.from + row.offset;
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
     const long further = row.from == row.to ? -1 : 1;

@@ -38,6 +38,18 @@ std::vector<std::pair<int, int>> slopesFor(int max_pace)
   return slopes;
 }
 
+/// What a slip off a line of `pace` places a frame costs in the kernels' fixed point: `slip_penalty` of a change of
+/// pace, divided by the square root of the pace above 1x. A revisit between two of the paces followed drifts off
+/// the nearer line by about pace x 0.07 places a frame, so a fast one needs a slip every few frames (2.2x: about
+/// every 7) and, at one price for all, pays for them over its whole memory as much as a rival's noise. Measured on
+/// 62 steady paces from 1.0x to 2.9x (scripts/pace_sweep.py): summed recall 40.35 -> 42.69 at 272 -> 274 wrong
+/// loops; dividing by the pace itself, 43.04 at 295 (doc/results.md "Slips cheaper at fast paces").
+int16_t slipCost(float slip_penalty, float change_cost, double pace)
+{
+  const double cost = double(slip_penalty) * double(change_cost) * pace_kernels::kOne / std::sqrt(std::max(1.0, pace));
+  return static_cast<int16_t>(std::min<double>(pace_kernels::kOne, std::round(cost)));
+}
+
 /// A cost of the kernels as a normalised distance.
 float costOf(int16_t cost)
 {
@@ -244,11 +256,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.change =
       static_cast<int16_t>(std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
   // A slip costs a fraction of a change of pace (-1: paths never leave their line; the kernels skip the term).
-  chunk.slip =
-      slip_penalty_ > 0.0f
-          ? static_cast<int16_t>(std::min<double>(
-                pace_kernels::kOne, std::round(double(slip_penalty_) * double(change_cost) * pace_kernels::kOne)))
-          : int16_t(-1);
+  chunk.slip = slip_penalty_ > 0.0f ? slipCost(slip_penalty_, change_cost, 1.0) : int16_t(-1);
   chunk.tolerance = tolerance_;
   chunk.raw = raw_.data();
   chunk.entry = entry_.data();
@@ -264,6 +272,8 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     const int p = slopes_[v].first;
     const long step = stepAt(t, std::abs(p), slopes_[v].second);
     rows[v].offset = p > 0 ? -step : step;
+    rows[v].slip = chunk.slip < 0 ? int16_t(-1)
+                                  : slipCost(slip_penalty_, change_cost, double(std::abs(p)) / slopes_[v].second);
     const auto found = std::find(offsets.begin(), offsets.end(), rows[v].offset);
     slot[v] = static_cast<uint8_t>(found - offsets.begin());
     if (found == offsets.end())
