@@ -119,8 +119,12 @@ public:
   uint16_t terms(size_t column, int direction) const override;
   float pace(size_t column) const override
   {
-    const auto& slope = slopes_[paceIndex(column)];
-    return static_cast<float>(std::abs(slope.first)) / static_cast<float>(slope.second);
+    return static_cast<float>(placesPerFrame(slopes_[paceIndex(column)]));
+  }
+  /// A pace followed (paces()) as places a frame, whatever its direction.
+  static double placesPerFrame(const std::pair<int, int>& slope)
+  {
+    return static_cast<double>(std::abs(slope.first)) / static_cast<double>(slope.second);
   }
   size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
   void setSequenceLength(int sequence_length) override;

@@ -28,7 +28,7 @@ struct PaceRow
   const int16_t* from;  ///< previous frame's costs, indexed by place in the chunk; valid from -pad to m + pad
   int16_t* to;          ///< this frame's costs, indexed by place in the chunk
   long offset;          ///< where the path comes from: -step (forward) or +step (reverse)
-  int16_t slip;         ///< the cost of a slip off this line (Chunk::slip >= 0); the faster the line, the less
+  int16_t slip;         ///< the cost of a slip off this line (with Chunk::slips); the faster the line, the less
 };
 
 /// One chunk of places [begin, begin + m) of a frame.
@@ -43,11 +43,10 @@ struct Chunk
   float entry_scale;  ///< the entry term of distance r: nearbyint(float(r) * entry_scale) (the weight 1 - a in it)
   int16_t keep;       ///< a in 1/32768: a product x * a is (x * keep + 2^14) >> 15
   int16_t change;     ///< the cost of a change of pace
-  /// The cost of a path moving one place off its line in a frame (one place further, or one fewer where the line
+  /// Whether a path may move one place off its line in a frame (one place further, or one fewer where the line
   /// advances), so a revisit between two of the paces followed, or drifting from one to the next, is followed
-  /// without a change of pace; -1: never (the slip_penalty 0 of the configuration). Else each row has its own
-  /// (PaceRow::slip).
-  int16_t slip;
+  /// without a change of pace, for its row's PaceRow::slip; false for the slip_penalty 0 of the configuration.
+  bool slips;
   const int16_t* old_best;  ///< M of the previous frame, indexed by place; valid from -pad to n + pad
   int16_t* best;            ///< M of this frame, indexed by place
   const PaceRow* rows;
@@ -141,7 +140,7 @@ inline int16_t offLine(const PaceRow& row, long from)
 /// Every pace's cost and M of place i of the chunk:
 ///   C[j, v] = entry + a * min(C'[j + offset_v, v], M'[j + offset_v] + change, C'[j + offset_v -+ 1, v] + slip),
 ///   M[j] = min_v C[j, v] + extra
-/// (primes: the previous frame; the slip term as offLine, when slip >= 0). The vector kernels' tails.
+/// (primes: the previous frame; the slip term as offLine, when the chunk slips). The vector kernels' tails.
 inline void update(const Chunk& c, size_t i, ChunkSums& sums)
 {
   const size_t j = c.begin + i;
@@ -151,7 +150,7 @@ inline void update(const Chunk& c, size_t i, ChunkSums& sums)
     const PaceRow& row = c.rows[v];
     const long from = static_cast<long>(i) + row.offset;
     int16_t path = std::min(row.from[from], addSaturated(c.old_best[static_cast<long>(j) + row.offset], c.change));
-    if (c.slip >= 0)
+    if (c.slips)
       path = std::min(path, addSaturated(offLine(row, from), row.slip));
     const int16_t cost = addSaturated(c.entry[i], scaled(path, c.keep));
     row.to[i] = cost;

@@ -258,7 +258,7 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
   int16_t* best = c.smallest;
   for (size_t i = 0; i < m; i += 32)
     _mm512_storeu_si512(best + i, highest);
-  if (c.slip >= 0)
+  if (c.slips)
     paces512<true>(c, best, whole, top, keep);
   else
     paces512<false>(c, best, whole, top, keep);
@@ -326,7 +326,7 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
   int16_t* best = c.smallest;
   for (size_t k = 0; k < whole; k += 16)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + k), highest);
-  if (c.slip >= 0)
+  if (c.slips)
     paces256<true>(c, best, whole, keep);
   else
     paces256<false>(c, best, whole, keep);

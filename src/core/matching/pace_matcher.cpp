@@ -255,8 +255,8 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.entry_scale = static_cast<float>((32768.0 - keep_fixed) / 32768.0 * pace_kernels::kOne / max_distance);
   chunk.change =
       static_cast<int16_t>(std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
-  // A slip costs a fraction of a change of pace (-1: paths never leave their line; the kernels skip the term).
-  chunk.slip = slip_penalty_ > 0.0f ? slipCost(slip_penalty_, change_cost, 1.0) : int16_t(-1);
+  // A slip costs a fraction of a change of pace (slip_penalty 0: paths never leave their line; the kernels skip the term).
+  chunk.slips = slip_penalty_ > 0.0f;
   chunk.tolerance = tolerance_;
   chunk.raw = raw_.data();
   chunk.entry = entry_.data();
@@ -272,8 +272,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     const int p = slopes_[v].first;
     const long step = stepAt(t, std::abs(p), slopes_[v].second);
     rows[v].offset = p > 0 ? -step : step;
-    rows[v].slip = chunk.slip < 0 ? int16_t(-1)
-                                  : slipCost(slip_penalty_, change_cost, double(std::abs(p)) / slopes_[v].second);
+    rows[v].slip = chunk.slips ? slipCost(slip_penalty_, change_cost, placesPerFrame(slopes_[v])) : int16_t(-1);
     const auto found = std::find(offsets.begin(), offsets.end(), rows[v].offset);
     slot[v] = static_cast<uint8_t>(found - offsets.begin());
     if (found == offsets.end())
