@@ -4,7 +4,7 @@
 it published with openable_eval against the stream's own ground truth.
 
   scripts/pace_eval.py --first DIR --second DIR --config FILE.yaml --out DIR [--profile P]... [--first-profile P]
-                       [--tolerance T] [--frames N] [--bin DIR] [--set key=value]... [--camera-info FILE]
+                       [--tolerance T] [--frames N] [--start S] [--bin DIR] [--set key=value]... [--camera-info FILE]
                        [--jobs N] [--markdown] [--misses]
 
 A profile resamples a traversal of n frames (no synthetic image: frames are skipped or repeated):
@@ -20,9 +20,9 @@ Ground truth: a frame of the second traversal that shows place k is a true loop 
 traversal that shows a place within T of k (openable_eval --pairs). The first traversal has no loop.
 
 --camera-info FILE verifies candidates geometrically with that camera (openable_offline --camera-info).
---frames N takes the first N frames of each traversal (a short route). Prints one line per profile: published,
-wrong, precision, recall (and --markdown, a table row); --misses adds where the recall went: the statuses (in
-decisions.csv) of the frames that have a true loop and got no right one published.
+--frames N takes the first N frames of each traversal (a short route), --start S skips the first S of each first.
+Prints one line per profile: published, wrong, precision, recall (and --markdown, a table row); --misses adds where
+the recall went: the statuses (in decisions.csv) of the frames that have a true loop and got no right one published.
 """
 import argparse
 import concurrent.futures
@@ -104,7 +104,7 @@ def images(folder):
 
 def build_stream(args, profile, out):
     """Writes out/stream/ (symbolic links to the real frames) and out/pairs.txt; returns the frame count."""
-    first, second = images(args.first), images(args.second)
+    first, second = images(args.first)[args.start:], images(args.second)[args.start:]
     n = min(len(first), len(second), args.frames or len(first))
     first_places = profile_indices(args.first_profile, n)
     second_places = profile_indices(profile, n)
@@ -175,6 +175,7 @@ def main():
     parser.add_argument('--first-profile', default='1x')
     parser.add_argument('--tolerance', type=int, default=2)
     parser.add_argument('--frames', type=int, default=0)
+    parser.add_argument('--start', type=int, default=0)
     parser.add_argument('--misses', action='store_true')
     parser.add_argument('--bin', default=os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'build', 'ws',
                                                       'devel', 'lib', 'openable_ros'))

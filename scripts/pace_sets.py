@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""The stream sets every change of the matcher or the decision is judged on (doc/results.md quotes their totals).
+
+  scripts/pace_sets.py SET --out DIR [--bin DIR] [--set key=value]... [--jobs N] [--json FILE]
+
+SET is one of
+  pace     90 streams: Gardens Point day_right then night_right, day_right then day_left, day_left then
+           night_right and night_right then day_left, Nordland summer then winter and winter then summer
+           (config/default.yaml), day_right then night_right and day_right then day_left with
+           config/gardens_point.yaml, and the 60-frame short routes day_right then day_left and then night_right;
+           each at 1x, 2x, 0.5x, stops:100, 1.25x, 2.5x, ramp:0.5,2, varying:100 and random:1
+  holdout  35 streams nothing was tuned on: GP day_left then day_right and night_right then day_right
+           (default.yaml), day_left then night_right (gardens_point.yaml), day_right then night_right
+           (nordland.yaml), Nordland summer then winter (gardens_point.yaml); at 1x, 1.5x, 0.7x, stops:60,
+           varying:150, random:2 and random:3
+  short    95 short routes: GP frames 0-59, 100-159 and 140-199 of five pairings, Nordland frames 300-399 and
+           1000-1099 both ways; at 1x, 2x, 0.5x, stops:30 and 1.5x
+(scripts/pace_sweep.py has the fourth, every steady pace from 1.0x to 2.9x.) Prints one line per stream and profile,
+then the totals: published / wrong / summed recall. --json writes {"stream profile": [published, wrong, recall]}, so
+two runs can be compared stream by stream.
+"""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(HERE, '..', '..', 'shared', 'data')
+GP = os.path.join(DATA, 'gardens_point')
+NL = os.path.join(DATA, 'nordland')
+LINE = re.compile(r'(\S+)\s+frames\s+\d+\s+published\s+(\d+)\s+wrong\s+(\d+)\s+precision\s+\S+\s+recall\s+(\S+)')
+PACE = '1x 2x 0.5x stops:100 1.25x 2.5x ramp:0.5,2 varying:100 random:1'.split()
+HOLDOUT = '1x 1.5x 0.7x stops:60 varying:150 random:2 random:3'.split()
+SHORT = '1x 2x 0.5x stops:30 1.5x'.split()
+
+
+def streams(which):
+    """(name, first, second, tolerance, config, start, frames, profiles)."""
+    gp = lambda a, b: (os.path.join(GP, a), os.path.join(GP, b), 2)
+    nl = lambda a, b: (os.path.join(NL, a), os.path.join(NL, b), 1)
+    if which == 'pace':
+        rows = [('gp_dr_nr_def', gp('day_right', 'night_right'), 'default', 0, 0),
+                ('gp_dr_dl_def', gp('day_right', 'day_left'), 'default', 0, 0),
+                ('gp_dl_nr_def', gp('day_left', 'night_right'), 'default', 0, 0),
+                ('gp_nr_dl_def', gp('night_right', 'day_left'), 'default', 0, 0),
+                ('nl_s_w_def', nl('summer', 'winter'), 'default', 0, 0),
+                ('nl_w_s_def', nl('winter', 'summer'), 'default', 0, 0),
+                ('gp_dr_nr_gp', gp('day_right', 'night_right'), 'gardens_point', 0, 0),
+                ('gp_dr_dl_gp', gp('day_right', 'day_left'), 'gardens_point', 0, 0),
+                ('gp_short_dr_dl', gp('day_right', 'day_left'), 'default', 0, 60),
+                ('gp_short_dr_nr', gp('day_right', 'night_right'), 'default', 0, 60)]
+        return [(n, *pair, cfg, start, frames, PACE) for n, pair, cfg, start, frames in rows]
+    if which == 'holdout':
+        rows = [('gp_dl_dr_def', gp('day_left', 'day_right'), 'default'),
+                ('gp_nr_dr_def', gp('night_right', 'day_right'), 'default'),
+                ('gp_dl_nr_gp', gp('day_left', 'night_right'), 'gardens_point'),
+                ('gp_dr_nr_nl', gp('day_right', 'night_right'), 'nordland'),
+                ('nl_s_w_gp', nl('summer', 'winter'), 'gardens_point')]
+        return [(n, *pair, cfg, 0, 0, HOLDOUT) for n, pair, cfg in rows]
+    out = []
+    for a, b in (('day_right', 'day_left'), ('day_left', 'day_right'), ('day_right', 'night_right'),
+                 ('night_right', 'day_right'), ('day_left', 'night_right')):
+        for start in (0, 100, 140):
+            out.append(('short_%s_%s_%d' % (a, b, start), *gp(a, b), 'default', start, 60, SHORT))
+    for a, b in (('summer', 'winter'), ('winter', 'summer')):
+        for start in (300, 1000):
+            out.append(('short_%s_%s_%d' % (a, b, start), *nl(a, b), 'default', start, 100, SHORT))
+    return out
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('which', choices=['pace', 'holdout', 'short'])
+    parser.add_argument('--out', required=True)
+    parser.add_argument('--bin', default=os.path.join(HERE, '..', 'build', 'ws', 'devel', 'lib', 'openable_ros'))
+    parser.add_argument('--set', action='append', default=[])
+    parser.add_argument('--jobs', type=int, default=2)
+    parser.add_argument('--json', default='')
+    args = parser.parse_args()
+    results = {}
+    for name, first, second, tolerance, config, start, frames, profiles in streams(args.which):
+        command = [sys.executable, os.path.join(HERE, 'pace_eval.py'), '--bin', args.bin, '--jobs', str(args.jobs),
+                   '--first', first, '--second', second, '--tolerance', str(tolerance),
+                   '--config', os.path.join(HERE, '..', 'config', config + '.yaml'),
+                   '--out', os.path.join(args.out, name), '--start', str(start), '--frames', str(frames)]
+        for key_value in args.set:
+            command += ['--set', key_value]
+        for profile in profiles:
+            command += ['--profile', profile]
+        run = subprocess.run(command, capture_output=True, text=True)
+        if run.returncode != 0:
+            sys.exit('pace_sets: %s failed:\n%s' % (name, run.stderr[-2000:]))
+        for line in run.stdout.splitlines():
+            match = LINE.match(line)
+            if match:
+                key = '%s %s' % (name, match.group(1))
+                results[key] = [int(match.group(2)), int(match.group(3)), float(match.group(4))]
+                print('%-40s published %5d  wrong %4d  recall %.3f' % (key, *results[key]), flush=True)
+    print('%s: %d streams, published %d / wrong %d / summed recall %.2f' % (
+        args.which, len(results), sum(r[0] for r in results.values()), sum(r[1] for r in results.values()),
+        sum(r[2] for r in results.values())))
+    if args.json:
+        with open(args.json, 'w') as f:
+            json.dump(results, f, indent=0)
+
+
+if __name__ == '__main__':
+    main()
