@@ -126,6 +126,28 @@ def build_stream(args, profile, out):
     return total
 
 
+# One profile's line as main() prints it (without --markdown).
+LINE = re.compile(r'(\S+)\s+frames\s+\d+\s+published\s+(\d+)\s+wrong\s+(\d+)\s+precision\s+\S+\s+recall\s+(\S+)')
+
+
+def evaluate(first, second, tolerance, config, out, profiles, bin_dir, jobs=2, sets=(), first_profile='1x', start=0,
+             frames=0):
+    """This script on one pair of traversals, in a process of its own (scripts/pace_sweep.py and pace_sets.py run
+    many): [(profile, published, wrong, recall)]. Exits with the script's error output when it fails."""
+    command = [sys.executable, os.path.abspath(__file__), '--bin', bin_dir, '--jobs', str(jobs), '--first', first,
+               '--second', second, '--tolerance', str(tolerance), '--config', config, '--first-profile', first_profile,
+               '--out', out, '--start', str(start), '--frames', str(frames)]
+    for key_value in sets:
+        command += ['--set', key_value]
+    for profile in profiles:
+        command += ['--profile', profile]
+    run = subprocess.run(command, capture_output=True, text=True)
+    if run.returncode != 0:
+        sys.exit('pace_eval: %s then %s failed:\n%s' % (first, second, run.stderr[-2000:]))
+    return [(m.group(1), int(m.group(2)), int(m.group(3)), float(m.group(4)))
+            for m in map(LINE.match, run.stdout.splitlines()) if m]
+
+
 def run(args, profile):
     out = os.path.join(args.out, re.sub(r'[^A-Za-z0-9.]+', '_', profile))
     os.makedirs(out, exist_ok=True)

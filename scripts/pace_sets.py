@@ -22,15 +22,13 @@ two runs can be compared stream by stream.
 import argparse
 import json
 import os
-import re
-import subprocess
-import sys
+
+import pace_eval  # this folder
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, '..', '..', 'shared', 'data')
 GP = os.path.join(DATA, 'gardens_point')
 NL = os.path.join(DATA, 'nordland')
-LINE = re.compile(r'(\S+)\s+frames\s+\d+\s+published\s+(\d+)\s+wrong\s+(\d+)\s+precision\s+\S+\s+recall\s+(\S+)')
 PACE = '1x 2x 0.5x stops:100 1.25x 2.5x ramp:0.5,2 varying:100 random:1'.split()
 HOLDOUT = '1x 1.5x 0.7x stops:60 varying:150 random:2 random:3'.split()
 SHORT = '1x 2x 0.5x stops:30 1.5x'.split()
@@ -81,23 +79,13 @@ def main():
     args = parser.parse_args()
     results = {}
     for name, first, second, tolerance, config, start, frames, profiles in streams(args.which):
-        command = [sys.executable, os.path.join(HERE, 'pace_eval.py'), '--bin', args.bin, '--jobs', str(args.jobs),
-                   '--first', first, '--second', second, '--tolerance', str(tolerance),
-                   '--config', os.path.join(HERE, '..', 'config', config + '.yaml'),
-                   '--out', os.path.join(args.out, name), '--start', str(start), '--frames', str(frames)]
-        for key_value in args.set:
-            command += ['--set', key_value]
-        for profile in profiles:
-            command += ['--profile', profile]
-        run = subprocess.run(command, capture_output=True, text=True)
-        if run.returncode != 0:
-            sys.exit('pace_sets: %s failed:\n%s' % (name, run.stderr[-2000:]))
-        for line in run.stdout.splitlines():
-            match = LINE.match(line)
-            if match:
-                key = '%s %s' % (name, match.group(1))
-                results[key] = [int(match.group(2)), int(match.group(3)), float(match.group(4))]
-                print('%-40s published %5d  wrong %4d  recall %.3f' % (key, *results[key]), flush=True)
+        config_file = os.path.join(HERE, '..', 'config', config + '.yaml')
+        for profile, published, wrong, recall in pace_eval.evaluate(
+                first, second, tolerance, config_file, os.path.join(args.out, name), profiles, args.bin, args.jobs,
+                args.set, start=start, frames=frames):
+            key = '%s %s' % (name, profile)
+            results[key] = [published, wrong, recall]
+            print('%-40s published %5d  wrong %4d  recall %.3f' % (key, published, wrong, recall), flush=True)
     print('%s: %d streams, published %d / wrong %d / summed recall %.2f' % (
         args.which, len(results), sum(r[0] for r in results.values()), sum(r[1] for r in results.values()),
         sum(r[2] for r in results.values())))

@@ -15,16 +15,16 @@ recall and precision against the pace, with the paces followed, through gnuplot 
 """
 import argparse
 import os
-import re
 import shutil
 import subprocess
 import sys
+
+import pace_eval  # this folder
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, '..', '..', 'shared', 'data')
 FACTORS = ['%.1fx' % (1 + 0.1 * k) for k in range(20)]
 ROUND_FACTORS = {'1.0x', '1.5x', '2.0x', '2.5x'}
-LINE = re.compile(r'(\S+)\s+frames\s+\d+\s+published\s+(\d+)\s+wrong\s+(\d+)\s+precision\s+\S+\s+recall\s+(\S+)')
 
 
 def streams():
@@ -83,21 +83,11 @@ def main():
     args = parser.parse_args()
     results = []  # (label, factor, published, wrong, recall)
     for index, (label, first, second, tolerance, profiles, first_pace) in enumerate(streams()):
-        command = [sys.executable, os.path.join(HERE, 'pace_eval.py'), '--bin', args.bin, '--jobs', str(args.jobs),
-                   '--first', first, '--second', second, '--tolerance', str(tolerance), '--config', args.config,
-                   '--first-profile', first_pace, '--out', os.path.join(args.out, 'stream%02d' % index)]
-        for key_value in args.set:
-            command += ['--set', key_value]
-        for profile in profiles:
-            command += ['--profile', profile]
-        run = subprocess.run(command, capture_output=True, text=True)
-        if run.returncode != 0:
-            sys.exit('pace_sweep: %s failed:\n%s' % (label, run.stderr[-2000:]))
-        for line in run.stdout.splitlines():
-            match = LINE.match(line)
-            if match:
-                factor = match.group(1) if first_pace == '1x' else '1/' + first_pace
-                results.append((label, factor, int(match.group(2)), int(match.group(3)), float(match.group(4))))
+        for profile, published, wrong, recall in pace_eval.evaluate(
+                first, second, tolerance, args.config, os.path.join(args.out, 'stream%02d' % index), profiles, args.bin,
+                args.jobs, args.set, first_profile=first_pace):
+            factor = profile if first_pace == '1x' else '1/' + first_pace
+            results.append((label, factor, published, wrong, recall))
     fast = [r for r in results if not r[1].startswith('1/')]
     print('| stream | ' + ' | '.join(f[:-1] for f in FACTORS) + ' |')
     print('|---|' + '---:|' * len(FACTORS))
