@@ -15,6 +15,8 @@ SET is one of
            varying:150, random:2 and random:3
   short    95 short routes: GP frames 0-59, 100-159 and 140-199 of five pairings, Nordland frames 300-399 and
            1000-1099 both ways; at 1x, 2x, 0.5x, stops:30 and 1.5x
+  route40  120 routes of 40 places (a corridor walked twice): GP frames 0-39, 50-89, 100-139 and 150-189 of the
+           five pairings, Nordland frames 300-339 and 1000-1039 both ways; at the profiles of `short`
 (scripts/pace_sweep.py has the fourth, every steady pace from 1.0x to 2.9x.) Prints one line per stream and profile,
 then the totals: published / wrong / summed recall. --json writes {"stream profile": [published, wrong, recall]}, so
 two runs can be compared stream by stream.
@@ -58,6 +60,15 @@ def streams(which):
                 ('nl_s_w_gp', nl('summer', 'winter'), 'gardens_point')]
         return [(n, *pair, cfg, 0, 0, HOLDOUT) for n, pair, cfg in rows]
     out = []
+    if which == 'route40':
+        for a, b in (('day_right', 'day_left'), ('day_left', 'day_right'), ('day_right', 'night_right'),
+                     ('night_right', 'day_right'), ('day_left', 'night_right')):
+            for start in (0, 50, 100, 150):
+                out.append(('route40_%s_%s_%d' % (a, b, start), *gp(a, b), 'default', start, 40, SHORT))
+        for a, b in (('summer', 'winter'), ('winter', 'summer')):
+            for start in (300, 1000):
+                out.append(('route40_%s_%s_%d' % (a, b, start), *nl(a, b), 'default', start, 40, SHORT))
+        return out
     for a, b in (('day_right', 'day_left'), ('day_left', 'day_right'), ('day_right', 'night_right'),
                  ('night_right', 'day_right'), ('day_left', 'night_right')):
         for start in (0, 100, 140):
@@ -70,7 +81,7 @@ def streams(which):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('which', choices=['pace', 'holdout', 'short'])
+    parser.add_argument('which', choices=['pace', 'holdout', 'short', 'route40'])
     parser.add_argument('--out', required=True)
     parser.add_argument('--bin', default=os.path.join(HERE, '..', 'build', 'ws', 'devel', 'lib', 'openable_ros'))
     parser.add_argument('--set', action='append', default=[])
