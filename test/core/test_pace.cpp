@@ -507,3 +507,79 @@ TEST(PacedStreams, BetweenThePacesFollowedASequenceSlipsAPlaceInsteadOfLosingThe
     EXPECT_GE(slipping.recall, straight.recall + 0.02) << factor << "x, without slips " << straight.recall;
   }
 }
+
+// Issue 20's bad input: a pace outside the range. At 10x the revisit shows every 10th place; no pace followed
+// (at most 3x) lines its frames up, so it may publish nothing, but nothing it publishes may be wrong.
+TEST(PacedStreams, ARevisitAtTenTimesThePacePublishesNoWrongLoop)
+{
+  for (const std::string name : {"default", "gardens_point"})
+    for (const std::string second : {"day_left", "night_right"})
+    {
+      const Published fast = run(pacedStream("day_right", second, every(10)), shippedAtAnyPace(name));
+      EXPECT_EQ(fast.wrong, 0) << name << ", day_right then " << second << ": published " << fast.published;
+      RecordProperty("tenfold_published_" + name + "_" + second, fast.published);
+    }
+}
+
+namespace
+{
+/// A pinhole-like view of a real panorama (equirectangular, 360 degrees across) facing `heading` pixels:
+/// 100 degrees wide, the horizon band, wrapped around the seam.
+cv::Mat viewOf(const cv::Mat& panorama, int heading)
+{
+  const int width = panorama.cols * 100 / 360, top = panorama.rows / 3, height = panorama.rows / 3;
+  cv::Mat view(height, width, panorama.type());
+  for (int x = 0; x < width; ++x)
+    panorama(cv::Rect((heading + x) % panorama.cols, top, 1, height)).copyTo(view.col(x));
+  return view;
+}
+}  // namespace
+
+// Issue 20's bad input: a camera that only rotates in place (a robot spinning on the spot), from a real
+// street-level panorama. Three turns at 7 pixels (about 2 degrees) a frame: every frame is the same place, so a
+// loop is right only where the views face the same way, within T = 2 frames of the first turn's frame facing
+// the nearest way (a turn is 182.9 frames, so that frame is up to half a step off: 2.5 steps, about 7 degrees);
+// one facing elsewhere would give the backend a wrong relative heading. The rotation is not a stop: the views
+// differ, and each is a place. Back at a heading it has seen, the robot is where it was: that is a loop.
+TEST(PacedStreams, ACameraThatOnlyRotatesInPlacePublishesOnlyLoopsFacingTheSameWay)
+{
+  const cv::Mat panorama = cv::imread(openable_test::sharedData("panoramic/streetview_pairs/2_1.jpg"), cv::IMREAD_COLOR);
+  ASSERT_FALSE(panorama.empty());
+  const int step = 7, frames = 3 * panorama.cols / step;
+  for (const std::string name : {"default", "gardens_point"})
+  {
+    OnlineDetector detector(shippedAtAnyPace(name));
+    std::vector<FrameOutcome> outcomes;
+    for (int t = 0; t < frames; ++t)
+    {
+      FrameInput input;
+      input.image = viewOf(panorama, t * step);
+      input.stamp = 1.0 + 0.1 * t;
+      outcomes.push_back(detector.process(input));
+    }
+    outcomes = settled(std::move(outcomes));
+    std::map<uint64_t, int> frame_of_place;  // a place's id -> the frame stored as it
+    int published = 0, wrong = 0, stored = 0;
+    for (int t = 0; t < frames; ++t)
+    {
+      if (outcomes[t].stored)
+      {
+        frame_of_place[outcomes[t].query.id] = t;
+        ++stored;
+      }
+      if (!outcomes[t].published())
+        continue;
+      ++published;
+      ASSERT_EQ(frame_of_place.count(outcomes[t].detection.best.id), 1u);
+      const int match = frame_of_place[outcomes[t].detection.best.id];
+      const int apart = std::abs(t - match) * step % panorama.cols;  // pixels of heading between the two views
+      wrong += std::min(apart, panorama.cols - apart) > 2 * step + step / 2 ? 1 : 0;
+    }
+    EXPECT_EQ(wrong, 0) << name << ": published " << published;
+    const int turn = panorama.cols / step;
+    EXPECT_GE(published, (frames - turn) / 2) << name;  // measured 347 (default) and 302 of the 366 frames after a turn
+    RecordProperty("rotating_published_" + name, published);
+    RecordProperty("rotating_stored_" + name, stored);
+    RecordProperty("rotating_frames", frames);
+  }
+}
