@@ -295,6 +295,46 @@ TEST(LoopConfirmation, FramesTheDecisionPassesOverStayAsTheyWere)
   EXPECT_EQ(confirmed[2].frame, 3u);
 }
 
+TEST(LoopConfirmation, AFramePassedOverLeavesAGapThatALaterRunReachingBackCountsRight)
+{
+  // Frames 0 to 3 held; the run published at 4 takes 1, 2 and 4 frames back (3, 2 and 0), not frame 1, which is
+  // dropped. Frame 5 breaks the run before anything is confirmed (3 frames): 0, 2, 3 and 4 are held again, with a
+  // gap where 1 was. Frame 6 resumes and takes 2 and 5 frames back: frames 4 and 1. Frame 4 joins; frame 1 is not
+  // held, and nothing else may go in its place (counting held frames instead of stored ones took frame 0, a frame
+  // the decision had not judged: found on Nordland summer then winter at 2x, 8 wrong loops).
+  LoopConfirmation confirmation(3);
+  FrameOutcome o;
+  o.status = FrameStatus::Inconsistent;
+  for (uint64_t frame = 0; frame < 4; ++frame)
+  {
+    o.frame = frame;
+    confirmation.stored(o, {}, true);
+  }
+  o.frame = 4;
+  o.status = FrameStatus::Published;
+  EXPECT_TRUE(confirmation.stored(o, {1, 2, 4}).empty());
+  EXPECT_EQ(confirmation.pending(), 4u);
+  o.frame = 5;
+  o.status = FrameStatus::NotUnique;
+  confirmation.stored(o, {}, true);
+  EXPECT_EQ(confirmation.pending(), 0u);
+  o.frame = 6;
+  o.status = FrameStatus::Published;
+  confirmation.stored(o, {2, 5});
+  std::vector<FrameOutcome> confirmed;
+  for (uint64_t frame = 7; frame < 10; ++frame)
+  {
+    o.frame = frame;
+    o.status = FrameStatus::Published;  // stored() made the last one Pending
+    for (FrameOutcome& c : confirmation.stored(o))
+      confirmed.push_back(c);
+  }
+  std::vector<uint64_t> frames;
+  for (const FrameOutcome& c : confirmed)
+    frames.push_back(c.frame);
+  EXPECT_EQ(frames, (std::vector<uint64_t>{4, 6})) << "frame 4 joined, then frame 6 confirmed";
+}
+
 TEST(LoopConfirmation, ARunThatEndsUnconfirmedLeavesItsFirstFramesInconsistentAndUncounted)
 {
   LoopConfirmation confirmation(3);

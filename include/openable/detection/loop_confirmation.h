@@ -53,11 +53,12 @@ public:
   std::vector<Outcome> stored(Outcome& outcome, const std::vector<size_t>& joined_before = {}, bool may_join = false)
   {
     std::vector<Outcome> confirmed;
+    const uint64_t index = ++stored_;
     if (!outcome.published())
     {
       dropped_ += pendingOwn();  // the run ended (or never was): what waited for it is not confirmed
       holdUnconfirmed();
-      hold(outcome, may_join);
+      hold(outcome, may_join, index);
       return confirmed;
     }
     for (Waiting& w : waiting_)
@@ -71,9 +72,10 @@ public:
     // Oldest first: the frames furthest back come first.
     for (auto back = joined_before.rbegin(); back != joined_before.rend(); ++back)
     {
-      if (*back == 0 || *back > held_.size())
+      Waiting* found = heldFrame(index - std::min<uint64_t>(*back, index));
+      if (*back == 0 || !found)
         continue;  // not held (it went out, or a frame between them ended what was held)
-      Waiting& w = held_[held_.size() - *back];
+      Waiting& w = *found;
       if (frames_ == 0)
         confirm(w, confirmed);
       else
@@ -83,7 +85,7 @@ public:
     if (frames_ > 0)
     {
       outcome.status = FrameStatus::Pending;
-      waiting_.push_back(Waiting{{outcome}, 0, false});
+      waiting_.push_back(Waiting{{outcome}, 0, false, index});
     }
     return confirmed;
   }
@@ -143,7 +145,18 @@ private:
     std::vector<Outcome> outcomes;  ///< the stored frame, then its repeats
     int confirmations = 0;          ///< stored frames since it that went on with its run
     bool joined = false;            ///< a frame the run reached back to (not Pending, not counted as dropped)
+    uint64_t index = 0;             ///< which stored frame it is (stored() calls, from 1): what joinedBefore counts
   };
+
+  /// The held frame `index`, or none. Held frames need not be consecutive: a frame the reach-back passed over
+  /// (or one it did not take) leaves a gap when the ones around it are held again after their run broke.
+  Waiting* heldFrame(uint64_t index)
+  {
+    for (auto w = held_.rbegin(); w != held_.rend(); ++w)
+      if (w->index == index)
+        return &*w;
+    return nullptr;
+  }
 
   void confirm(Waiting& w, std::vector<Outcome>& confirmed)
   {
@@ -174,14 +187,14 @@ private:
       held_.pop_front();
   }
   /// A frame that may join a later run is held; any other ends what was held.
-  void hold(const Outcome& outcome, bool may_join)
+  void hold(const Outcome& outcome, bool may_join, uint64_t index)
   {
     if (!may_join)
     {
       held_.clear();
       return;
     }
-    held_.push_back(Waiting{{outcome}, 0, true});
+    held_.push_back(Waiting{{outcome}, 0, true, index});
     if (held_.size() > kMaxHeld)
       held_.pop_front();
   }
@@ -196,6 +209,7 @@ private:
 
   int frames_ = 0;
   uint64_t dropped_ = 0;
+  uint64_t stored_ = 0;  ///< stored() calls so far: the index of the last stored frame
   std::deque<Waiting> waiting_;
   std::deque<Waiting> held_;  ///< the frames that may join a run, just before the next stored one, oldest first
 };
