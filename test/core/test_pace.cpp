@@ -538,7 +538,7 @@ cv::Mat viewOf(const cv::Mat& panorama, int heading)
 // Issue 20's bad input: a camera that only rotates in place (a robot spinning on the spot), from a real
 // street-level panorama. Three turns at 7 pixels (about 2 degrees) a frame: every frame is the same place, so a
 // loop is right only where the views face the same way, within T = 2 frames of the first turn's frame facing
-// the nearest way (a turn is 182.9 frames, so that frame is up to half a step off: 2.5 steps, about 7 degrees);
+// the nearest way (a turn is 182.9 frames, so that frame is up to half a step off: 17 pixels, about 5 degrees);
 // one facing elsewhere would give the backend a wrong relative heading. The rotation is not a stop: the views
 // differ, and each is a place. Back at a heading it has seen, the robot is where it was: that is a loop.
 TEST(PacedStreams, ACameraThatOnlyRotatesInPlacePublishesOnlyLoopsFacingTheSameWay)
