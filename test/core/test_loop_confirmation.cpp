@@ -141,6 +141,24 @@ std::vector<FrameStatus> reference(const std::vector<Step>& steps, int frames, c
   }
   return out;
 }
+
+FrameOutcome outcomeOf(uint64_t frame, FrameStatus status)
+{
+  FrameOutcome o;
+  o.frame = frame;
+  o.status = status;
+  return o;
+}
+
+/// Frames 0 .. count - 1 as a run's first frames (Inconsistent), held for a run that may reach back to them.
+void holdRunStart(LoopConfirmation& confirmation, uint64_t count)
+{
+  for (uint64_t frame = 0; frame < count; ++frame)
+  {
+    FrameOutcome o = outcomeOf(frame, FrameStatus::Inconsistent);
+    confirmation.stored(o, {}, true);
+  }
+}
 }  // namespace
 
 TEST(LoopConfirmation, PublishesAFrameOnceThreeMoreFramesGoOnWithItsRun)
@@ -279,15 +297,8 @@ TEST(LoopConfirmation, FramesTheDecisionPassesOverStayAsTheyWere)
 {
   // Frames 0 to 3 held; the run published at 4 takes 1, 2 and 4 frames back (3, 2 and 0): 1 stays Inconsistent.
   LoopConfirmation confirmation(0);
-  FrameOutcome o;
-  o.status = FrameStatus::Inconsistent;
-  for (uint64_t frame = 0; frame < 4; ++frame)
-  {
-    o.frame = frame;
-    confirmation.stored(o, {}, true);
-  }
-  o.frame = 4;
-  o.status = FrameStatus::Published;
+  holdRunStart(confirmation, 4);
+  FrameOutcome o = outcomeOf(4, FrameStatus::Published);
   const std::vector<FrameOutcome> confirmed = confirmation.stored(o, {1, 2, 4, 9});  // 9: not held
   ASSERT_EQ(confirmed.size(), 3u);
   EXPECT_EQ(confirmed[0].frame, 0u);  // oldest first
@@ -303,29 +314,19 @@ TEST(LoopConfirmation, AFramePassedOverLeavesAGapThatALaterRunReachingBackCounts
   // held, and nothing else may go in its place (counting held frames instead of stored ones took frame 0, a frame
   // the decision had not judged: found on Nordland summer then winter at 2x, 8 wrong loops).
   LoopConfirmation confirmation(3);
-  FrameOutcome o;
-  o.status = FrameStatus::Inconsistent;
-  for (uint64_t frame = 0; frame < 4; ++frame)
-  {
-    o.frame = frame;
-    confirmation.stored(o, {}, true);
-  }
-  o.frame = 4;
-  o.status = FrameStatus::Published;
+  holdRunStart(confirmation, 4);
+  FrameOutcome o = outcomeOf(4, FrameStatus::Published);
   EXPECT_TRUE(confirmation.stored(o, {1, 2, 4}).empty());
   EXPECT_EQ(confirmation.pending(), 4u);
-  o.frame = 5;
-  o.status = FrameStatus::NotUnique;
+  o = outcomeOf(5, FrameStatus::NotUnique);
   confirmation.stored(o, {}, true);
   EXPECT_EQ(confirmation.pending(), 0u);
-  o.frame = 6;
-  o.status = FrameStatus::Published;
+  o = outcomeOf(6, FrameStatus::Published);
   confirmation.stored(o, {2, 5});
   std::vector<FrameOutcome> confirmed;
   for (uint64_t frame = 7; frame < 10; ++frame)
   {
-    o.frame = frame;
-    o.status = FrameStatus::Published;  // stored() made the last one Pending
+    o = outcomeOf(frame, FrameStatus::Published);
     for (FrameOutcome& c : confirmation.stored(o))
       confirmed.push_back(c);
   }

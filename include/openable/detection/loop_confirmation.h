@@ -72,8 +72,8 @@ public:
     // Oldest first: the frames furthest back come first.
     for (auto back = joined_before.rbegin(); back != joined_before.rend(); ++back)
     {
-      Waiting* found = heldFrame(index - std::min<uint64_t>(*back, index));
-      if (*back == 0 || !found)
+      Waiting* found = *back > 0 && *back < index ? heldFrame(index - *back) : nullptr;
+      if (!found)
         continue;  // not held (it went out, or a frame between them ended what was held)
       Waiting& w = *found;
       if (frames_ == 0)
