@@ -17,7 +17,7 @@ SET is one of
            1000-1099 both ways; at 1x, 2x, 0.5x, stops:30 and 1.5x
   route40  120 routes of 40 places (a corridor walked twice): GP frames 0-39, 50-89, 100-139 and 150-189 of the
            five pairings, Nordland frames 300-339 and 1000-1039 both ways; at the profiles of `short`
-(scripts/pace_sweep.py has the fourth, every steady pace from 1.0x to 2.9x.) Prints one line per stream and profile,
+(scripts/pace_sweep.py has one more, every steady pace from 1.0x to 2.9x.) Prints one line per stream and profile,
 then the totals: published / wrong / summed recall. --json writes {"stream profile": [published, wrong, recall]}, so
 two runs can be compared stream by stream.
 """
