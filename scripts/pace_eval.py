@@ -12,6 +12,7 @@ A profile resamples a traversal of n frames (no synthetic image: frames are skip
   2x, 3x, 10x   every 2nd / 3rd / 10th frame (faster); any factor >= 1, e.g. 1.5x
   0.5x, 0.33x   each frame 2 / 3 times (slower); any factor < 1
   stops:N       every frame once, with two stops of N frames (the frame at 1/3 and at 2/3 repeated N times)
+  stop:N        every frame once, with one stop of N frames (the frame at 1/2 repeated N times)
   varying[:P]   a pace varying smoothly between 0.5x and 2x (a sine of period P frames, default 100)
   ramp:A,B       a pace changing linearly from A x at the start to B x at the end
   parts:F1,F2,.. the traversal in equal parts, each at its pace factor (parts:1,2: the first half at 1x)
@@ -44,13 +45,14 @@ def profile_indices(profile, n):
             raise ValueError('pace factor must be > 0: ' + profile)
         count = int(math.ceil(n / factor - 1e-9))
         return [min(n - 1, int(math.floor(i * factor + 1e-9))) for i in range(count)]
-    match = re.fullmatch(r'stops:(\d+)', profile)
+    match = re.fullmatch(r'(stops?):(\d+)', profile)
     if match:
-        stop = int(match.group(1))
+        stop = int(match.group(2))
+        at = (n // 3, (2 * n) // 3) if match.group(1) == 'stops' else (n // 2,)
         out = []
         for i in range(n):
             out.append(i)
-            if i in (n // 3, (2 * n) // 3):
+            if i in at:
                 out.extend([i] * stop)
         return out
     match = re.fullmatch(r'varying(?::(\d+))?', profile)
