@@ -62,15 +62,14 @@ def streams(which):
     # Short routes: the same pairings, each from several starts; 'route40' takes 40 places of each, 'short' 60 of
     # Gardens Point and 100 of Nordland (a frame every 10 s there).
     gp_starts, gp_frames, nl_frames = ((0, 50, 100, 150), 40, 40) if which == 'route40' else ((0, 100, 140), 60, 100)
-    prefix = 'route40' if which == 'route40' else 'short'
     out = []
     for a, b in (('day_right', 'day_left'), ('day_left', 'day_right'), ('day_right', 'night_right'),
                  ('night_right', 'day_right'), ('day_left', 'night_right')):
         for start in gp_starts:
-            out.append(('%s_%s_%s_%d' % (prefix, a, b, start), *gp(a, b), 'default', start, gp_frames, SHORT))
+            out.append(('%s_%s_%s_%d' % (which, a, b, start), *gp(a, b), 'default', start, gp_frames, SHORT))
     for a, b in (('summer', 'winter'), ('winter', 'summer')):
         for start in (300, 1000):
-            out.append(('%s_%s_%s_%d' % (prefix, a, b, start), *nl(a, b), 'default', start, nl_frames, SHORT))
+            out.append(('%s_%s_%s_%d' % (which, a, b, start), *nl(a, b), 'default', start, nl_frames, SHORT))
     return out
 
 

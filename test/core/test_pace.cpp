@@ -552,11 +552,11 @@ TEST(PacedStreams, ACameraThatOnlyRotatesInPlacePublishesOnlyLoopsFacingTheSameW
   const cv::Mat panorama = cv::imread(openable_test::sharedData("panoramic/streetview_pairs/2_1.jpg"), cv::IMREAD_COLOR);
   ASSERT_FALSE(panorama.empty());
   const int step = 7, frames = 3 * panorama.cols / step;
+  std::vector<cv::Mat> views;
+  for (int t = 0; t < frames; ++t)
+    views.push_back(viewOf(panorama, t * step));
   for (const std::string name : {"default", "gardens_point"})
   {
-    std::vector<cv::Mat> views;
-    for (int t = 0; t < frames; ++t)
-      views.push_back(viewOf(panorama, t * step));
     const std::vector<FrameOutcome> outcomes = settledOutcomes(views, shippedAtAnyPace(name));
     std::map<uint64_t, int> frame_of_place;  // a place's id -> the frame stored as it
     int published = 0, wrong = 0, stored = 0;
