@@ -107,6 +107,11 @@ struct Config
   /// Frames after a published run's last frame during which a frame on its line, extended (within
   /// consistency_tolerance), at continue_uniqueness, resumes it (0 = off).
   int run_resume_frames = 30;
+  /// A frame is not a loop closure where the places around its best match look alike: the median over its last
+  /// LoopDecision::kReliefFrames frames of Detection::relief (their own distances to the places within
+  /// uniqueness_window of the match, largest minus smallest, in standard deviations of the row) below this
+  /// (0 = off; needs max_pace > 1).
+  double min_relief = 1.0;
   int confirm_frames = 3;  ///< a loop closure is published once this many more stored frames go on with its run
                            ///< (0 = at once; LoopConfirmation)
   /// With geometric verification: a frame below min_uniqueness (or with fewer than min_candidates places) joins

@@ -185,6 +185,11 @@ const std::vector<KeyAccess>& table()
               "loop-closure decision: for this many frames after a published run breaks, a frame whose match lies on "
               "its line, extended (within consistency_tolerance), at continue_uniqueness resumes it (0 = off)",
               &Config::run_resume_frames).range(0, 100000).live(),
+      makeKey("min_relief",
+              "loop-closure decision: no loop closure where the places around the best match look alike: the median "
+              "over the last 5 frames of how much their distances to the places within uniqueness_window of the match "
+              "vary, in standard deviations of the row, below this (0 = off; needs max_pace > 1)",
+              &Config::min_relief).range(0, 100).live(),
       makeKey("confirm_frames",
               "loop-closure decision: a loop closure is published once this many more stored frames go on with its "
               "run; it arrives that many keyframes late, with its own stamp (0 = at once)",

@@ -463,4 +463,24 @@ TEST(LoopConfirmation, OnRealImagesEveryConfirmedLoopWasALoopAndArrivesThreeFram
   EXPECT_GT(published, 150u);  // measured: 163 of the 169 published at once (the last 3 frames of each run wait)
 }
 
+TEST(LoopConfirmation, AFeaturelessFrameNeitherJoinsNorEndsWhatIsHeld)
+{
+  LoopConfirmation confirmation(0);
+  FrameOutcome first, featureless, published;
+  first.stored = featureless.stored = published.stored = true;
+  first.query.id = 0;
+  first.status = FrameStatus::Inconsistent;
+  featureless.query.id = 1;
+  featureless.status = FrameStatus::Featureless;
+  published.query.id = 2;
+  published.status = FrameStatus::Published;
+  EXPECT_TRUE(confirmation.stored(first, {}, true).empty());
+  EXPECT_TRUE(confirmation.stored(featureless, {}, false).empty());
+  const std::vector<FrameOutcome> confirmed = confirmation.stored(published, {2});
+  ASSERT_EQ(confirmed.size(), 1u);
+  EXPECT_EQ(confirmed[0].query.id, 0u);
+  EXPECT_EQ(confirmed[0].status, FrameStatus::Published);
+  EXPECT_EQ(confirmed[0].status_before, FrameStatus::Inconsistent);
+}
+
 }  // namespace openable

@@ -47,6 +47,7 @@ TEST(LoopDecision, StatusWordsAreTheDocumentedOnes)
   EXPECT_STREQ(toString(FrameStatus::AboveThreshold), "above_threshold");
   EXPECT_STREQ(toString(FrameStatus::NotUnique), "not_unique");
   EXPECT_STREQ(toString(FrameStatus::Inconsistent), "inconsistent");
+  EXPECT_STREQ(toString(FrameStatus::Featureless), "featureless");
   EXPECT_STREQ(toString(FrameStatus::FailedVerification), "failed_verification");
   EXPECT_STREQ(toString(FrameStatus::Unverified), "unverified");
   EXPECT_STREQ(toString(FrameStatus::NotKeyframe), "not_keyframe");
@@ -488,4 +489,70 @@ TEST(LoopDecision, VerifiedMinUniquenessIsOffOrInTheUnitRange)
     c.verified_min_uniqueness = bad;
     EXPECT_FALSE(c.problems().empty()) << bad;
   }
+}
+
+namespace
+{
+Config reliefConfig()
+{
+  Config c = decisionConfig();
+  c.max_pace = 3;
+  c.min_relief = 1.0;
+  return c;
+}
+
+Detection withRelief(uint64_t match, float relief, float uniqueness = 0.3f)
+{
+  Detection d = candidate(match, uniqueness);
+  d.relief = relief;
+  return d;
+}
+}  // namespace
+
+TEST(LoopDecision, FeaturelessWhereTheMedianReliefOfTheLastFramesIsBelowMinRelief)
+{
+  // The median of the last kReliefFrames (5) reliefs: one low frame (a passing train) changes nothing, three of
+  // five do; a run that went on along its line through them is published again at the first frame after.
+  LoopDecision decision(reliefConfig());
+  const std::vector<float> reliefs = {3, 3, 3, 0.3f, 3, 3, 0.3f, 0.3f, 0.3f, 3, 3, 3};
+  const auto P = FrameStatus::Published, I = FrameStatus::Inconsistent, F = FrameStatus::Featureless;
+  const std::vector<FrameStatus> expected = {I, I, P, P, P, P, P, F, F, F, F, P};
+  for (size_t i = 0; i < reliefs.size(); ++i)
+    EXPECT_EQ(decision.decide(withRelief(10 + i, reliefs[i])), expected[i]) << i;
+  // NaN (unknown: the paper's matcher, a merged answer) is left out; min_relief 0 is off.
+  LoopDecision unknown(reliefConfig());
+  for (uint64_t i = 0; i < 4; ++i)
+    EXPECT_NE(unknown.decide(withRelief(10 + i, std::nanf(""))), F) << i;
+  Config off = reliefConfig();
+  off.min_relief = 0.0;
+  LoopDecision gateless(off);
+  for (uint64_t i = 0; i < 4; ++i)
+    EXPECT_NE(gateless.decide(withRelief(10 + i, 0.0f)), F) << i;
+}
+
+TEST(LoopDecision, ARunThatJumpsAmongLookAlikePlacesEndsThere)
+{
+  // During the stretch (frames 6 to 9 featureless) the match jumps 80 places: the run ends, and after the stretch
+  // consistent_frames (3) frames must agree again.
+  LoopDecision decision(reliefConfig());
+  const std::vector<float> reliefs = {3, 3, 3, 3, 0.3f, 0.3f, 0.3f, 0.3f, 3, 3, 3, 3, 3};
+  const auto P = FrameStatus::Published, I = FrameStatus::Inconsistent, F = FrameStatus::Featureless;
+  const std::vector<FrameStatus> expected = {I, I, P, P, P, P, F, F, F, F, I, I, P};
+  for (size_t i = 0; i < reliefs.size(); ++i)
+    EXPECT_EQ(decision.decide(withRelief(i == 6 ? 90 : 10 + i, reliefs[i])), expected[i]) << i;
+}
+
+TEST(LoopDecision, TheReachBackPassesOverFeaturelessFrames)
+{
+  // A run's first frames before a featureless one join it once it is consistent: the featureless frame is neither
+  // joined (it is no loop closure) nor the end of the frames that may be.
+  Config c = reliefConfig();
+  c.run_start_tolerance = 1;
+  LoopDecision decision(c);
+  EXPECT_EQ(decision.decide(withRelief(10, 3.0f)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(withRelief(11, 0.3f)), FrameStatus::Inconsistent);  // median of 3, 0.3: 3
+  EXPECT_EQ(decision.decide(withRelief(12, 0.3f)), FrameStatus::Featureless);   // median of 3, 0.3, 0.3: 0.3
+  EXPECT_TRUE(decision.joinedBefore().empty());
+  EXPECT_EQ(decision.decide(withRelief(13, 3.0f)), FrameStatus::Published);  // the run coasted: 4 frames
+  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{2, 3}));
 }

@@ -186,9 +186,12 @@ private:
     while (held_.size() > kMaxHeld)
       held_.pop_front();
   }
-  /// A frame that may join a later run is held; any other ends what was held.
+  /// A frame that may join a later run is held; a Featureless one is passed over (the run goes on through it,
+  /// LoopDecision::joinedBefore skips it); any other ends what was held.
   void hold(const Outcome& outcome, bool may_join, uint64_t index)
   {
+    if (outcome.status == FrameStatus::Featureless)
+      return;
     if (!may_join)
     {
       held_.clear();

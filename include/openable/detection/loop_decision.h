@@ -25,6 +25,7 @@ enum class FrameStatus
   AboveThreshold,      ///< best normalised distance > threshold
   NotUnique,           ///< uniqueness (1 - best / second best) < min_uniqueness, or no gate is set at all
   Inconsistent,        ///< fewer than consistent_frames consecutive frames agree on where the loop is
+  Featureless,         ///< the places around the best match look alike (min_relief): where it is cannot be told
   FailedVerification,  ///< geometric verification rejected the candidate
   Unverified,          ///< verification is required but could not run (no camera, no features)
   Pending,             ///< passed every rule; published once confirm_frames more frames go on with its run
@@ -33,7 +34,7 @@ enum class FrameStatus
 
 /// The word used in outputs (loop_closures.csv, decisions.csv, LoopClosure.status): "published",
 /// "not_keyframe", "standstill", "time_jump", "too_early", "excluded", "above_threshold", "not_unique", "inconsistent",
-/// "failed_verification", "unverified", "pending", "unconfirmed".
+/// "featureless", "failed_verification", "unverified", "pending", "unconfirmed".
 const char* toString(FrameStatus status);
 
 /// How unique a best match is, higher = surer: 1 - best / second best (0 when the second best is 0), 1
@@ -63,6 +64,7 @@ struct DecisionOptions
   double verified_min_uniqueness;  ///< geometry stands in for min_uniqueness down to this uniqueness (-1: off)
   int run_start_tolerance;         ///< frames before a run within this of its line join it once published (-1: off)
   int run_resume_frames;           ///< frames after a published run breaks that a frame on its line resumes it (0: off)
+  double min_relief;               ///< the median relief of the last kReliefFrames frames must reach this (0: off)
 
   static DecisionOptions from(const Config& config);
 };
@@ -107,6 +109,9 @@ public:
   /// for a frame or two. Measured on 90 pace streams (doc/results.md "A run reaches further back"): summed recall
   /// +0.26 / +0.49 / +0.54 for 1 / 2 / 14 more wrong loops at 1 / 2 / 3 frames.
   static constexpr size_t kMaxSkipped = 2;
+  /// Frames whose Detection::relief the min_relief gate takes the median of: one frame's is noisy (a passing
+  /// train, a lamp post), a stretch of look-alike places lasts tens of frames.
+  static constexpr size_t kReliefFrames = 5;
   /// The decision score, higher = surer: the uniqueness of the best match; 0 while it means nothing (no
   /// candidates, fewer than min_candidates, or no rival place: a lone candidate would score 1).
   float score(const Detection& detection) const;
@@ -119,6 +124,8 @@ public:
 
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
+  /// The places around the recent frames' matches look alike (min_relief).
+  bool featureless() const;
   /// The best match is the newest place compared: the exclusion window's edge.
   bool pressedAgainstExclusion(const Detection& detection) const;
   /// The distance gate is set and the best match fails it.
@@ -128,6 +135,11 @@ private:
   /// The frame passed the gates (or geometry stood in for them): the run goes on or starts with it. Returns
   /// Published once the run is consistent, else Inconsistent.
   FrameStatus joinRun(const Detection& detection);
+  /// The run goes on (or starts) with the frame's match: its count, its line, its last match.
+  void extendRun(const Detection& detection);
+  /// A featureless frame: the run goes on through it where its match advances with the run, and it is never
+  /// published (Featureless).
+  FrameStatus coast(const Detection& detection);
   bool advancesWithRun(const Detection& detection) const;
   bool recentFramesFollowOneLine() const;
   FrameStatus decideFrame(const Detection& detection, const GeometryCheck& geometry);
@@ -180,6 +192,7 @@ private:
     FrameStatus status;
   };
   std::deque<Past> past_;
+  std::deque<float> reliefs_;  ///< Detection::relief of the last kReliefFrames frames that had one
 };
 
 }  // namespace openable

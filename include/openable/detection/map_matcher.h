@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -37,6 +38,12 @@ struct Detection
   /// matchUniqueness (loop_decision.h) of the best and the second best place (outside uniqueness_window).
   /// Whether the frame passes the gates is LoopDecision's to say.
   float uniqueness = 0.0f;
+  /// How much the query's own frame distances to the places within uniqueness_window of the best match vary
+  /// (largest minus smallest), in standard deviations of its distances to every place compared
+  /// (RowMatcher::rowSpread): below 1 the places around the match look alike (a snowfield, a tunnel, a bare
+  /// wall), and no sequence can tell which of them it is on. NaN when unknown (no candidate, a matcher that
+  /// keeps no spread, a merged answer of the place server). LoopDecision gates on it (min_relief).
+  float relief = std::nanf("");
   /// Where the exclusion cut the query's own session: the newest of its places that was compared (the ones
   /// after it are inside the exclusion window). Unset when the exclusion cut nothing, or in localisation.
   bool has_exclusion_edge = false;
@@ -110,6 +117,8 @@ private:
   /// The candidate in `column` of `session`'s matcher.
   Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;
   int minTerms() const;
+  /// Detection::relief of the best candidate of `detection`.
+  float reliefAround(const SessionMap& map, const Candidate& best) const;
 
   MatchOptions options_;
   bool partial_sequences_;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -117,6 +118,10 @@ public:
   }
   float normalized(size_t column, int* direction = nullptr, int min_terms = 1) const override;
   uint16_t terms(size_t column, int direction) const override;
+  float rowSpread() const override
+  {
+    return evidence_ > 0 ? spread_ : std::nanf("");
+  }
   float pace(size_t column) const override
   {
     return static_cast<float>(placesPerFrame(slopes_[paceIndex(column)]));

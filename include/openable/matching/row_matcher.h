@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +31,13 @@ public:
   {
     (void)column;
     return 1.0f;
+  }
+  /// The standard deviation of the last query's frame distances over the row's columns (normalised as
+  /// normalized() is), or NaN where the matcher does not keep it (SequenceMatcher): how far apart places
+  /// that are not the query usually are, the unit of Detection::relief.
+  virtual float rowSpread() const
+  {
+    return std::nanf("");
   }
   /// Frames of evidence behind the column's sequence in `direction` (at most the sequence length).
   virtual uint16_t terms(size_t column, int direction) const = 0;

@@ -160,8 +160,36 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     detection.best = detection.top.front();
     detection.uniqueness = matchUniqueness(
         detection.best.distance, picks.size() < 2 ? std::nullopt : std::optional<float>(picks[1].distance));
+    detection.relief = reliefAround(map, detection.best);
   }
   return detection;
+}
+
+float MapMatcher::reliefAround(const SessionMap& map, const Candidate& best) const
+{
+  // The query's own distances to the places around its match (2 x uniqueness_window + 1 frame distances, next
+  // to the pass over the row): a sequence localises by how these differ, and where they do not (Nordland's
+  // snowfields, every place within 10 of the match as far from the query as its match), a path drifts along
+  // the stretch unnoticed: all of the 12 wrong loops of Nordland summer then winter at 1x (doc/results.md).
+  const float spread = matchers_[best.session]->rowSpread();
+  if (!std::isfinite(spread))
+    return std::nanf("");
+  const PlaceDatabase& frames = map.frames(best.session);
+  const RowMatcher& matcher = *matchers_[best.session];
+  const uint64_t window = static_cast<uint64_t>(std::max(0, options_.uniqueness_window));
+  const uint64_t first = std::max({frames.firstId(), matcher.firstId(), best.id > window ? best.id - window : 0});
+  const uint64_t last = std::min(best.id + window, matcher.firstId() + matcher.columns() - 1);
+  const double scale = static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
+  double lowest = 1.0, highest = 0.0;
+  for (uint64_t id = first; id <= last && id - frames.firstId() < frames.size(); ++id)
+  {
+    const double d = metric_.distance(last_query_.data(), frames.descriptor(static_cast<size_t>(id - frames.firstId()))) / scale;
+    lowest = std::min(lowest, d);
+    highest = std::max(highest, d);
+  }
+  if (highest < lowest)
+    return std::nanf("");
+  return spread > 0.0f ? static_cast<float>((highest - lowest) / spread) : 0.0f;
 }
 
 void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
