@@ -160,6 +160,7 @@ LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::F
   msg->query_session = outcome.query.session;
   msg->distance = detection.best.distance;
   msg->uniqueness = detection.uniqueness;
+  msg->relief = detection.relief;
   msg->sequence_length = detection.best.sequence_length;
   msg->direction = detection.best.direction;
   msg->shift = detection.best.shift;

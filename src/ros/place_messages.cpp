@@ -116,6 +116,7 @@ LoopClosurePtr makeLoopClosure(const std_msgs::Header& header, const openable::M
   msg->query_session = merger.sessionIndex(o.query_session);
   msg->query_session_name = o.query_session;
   msg->uniqueness = o.detection.uniqueness;
+  msg->relief = o.detection.relief;
   msg->query_pose.orientation.w = 1.0;
   msg->match_pose.orientation.w = 1.0;
   msg->relative_pose.pose.orientation.w = 1.0;
