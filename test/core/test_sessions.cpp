@@ -462,7 +462,8 @@ TEST(MapMatcher, ReliefIsTheSpreadOfTheMatchsNeighboursInStandardDeviationsOfThe
       squares += (v - mean) * (v - mean) / static_cast<double>(row.size());
     const size_t best = static_cast<size_t>(d.best.id);
     const size_t low = best >= 4 ? best - 4 : 0, high = std::min(best + 4, places.size() - 1);
-    const auto [smallest, largest] = std::minmax_element(row.begin() + static_cast<long>(low), row.begin() + static_cast<long>(high) + 1);
+    const auto [smallest, largest] =
+        std::minmax_element(row.begin() + static_cast<long>(low), row.begin() + static_cast<long>(high) + 1);
     EXPECT_NEAR(d.relief, (*largest - *smallest) / std::sqrt(squares), 1e-3) << t;
     EXPECT_GT(d.relief, 1.0f) << t << ": random places around a revisited one do not look alike";
   }

@@ -183,7 +183,8 @@ float MapMatcher::reliefAround(const SessionMap& map, const Candidate& best) con
   double lowest = 1.0, highest = 0.0;
   for (uint64_t id = first; id <= last && id - frames.firstId() < frames.size(); ++id)
   {
-    const double d = metric_.distance(last_query_.data(), frames.descriptor(static_cast<size_t>(id - frames.firstId()))) / scale;
+    const uint64_t* place = frames.descriptor(static_cast<size_t>(id - frames.firstId()));
+    const double d = metric_.distance(last_query_.data(), place) / scale;
     lowest = std::min(lowest, d);
     highest = std::max(highest, d);
   }
