@@ -428,33 +428,51 @@ TEST(MapMatcher, CandidatesOfSeveralSessionsAreThoseOfOneScanOverAllRows)
   }
 }
 
-TEST(MapMatcher, ReliefIsTheSpreadOfTheMatchsNeighboursInStandardDeviationsOfTheRow)
+namespace
 {
-  // Reference: the query's frame distances to every place compared (a plain loop over the row), their population
-  // standard deviation, and the largest minus the smallest within uniqueness_window of the best match.
+/// Single frames matched at any pace (the PaceMatcher keeps the row's spread), every frame a candidate at once.
+Config reliefConfig(int uniqueness_window)
+{
   Config c = ldbConfig();
-  c.max_pace = 3;  // the PaceMatcher keeps the row's spread
-  c.sequence_length = 1;  // every frame a candidate at once
+  c.max_pace = 3;
+  c.sequence_length = 1;
   c.exclusion_window = 0;
-  c.uniqueness_window = 4;
-  std::mt19937_64 rng(11);
-  const std::vector<FrameDescriptor> places = route(rng, 60);
+  c.uniqueness_window = uniqueness_window;
+  return c;
+}
+
+/// A map of `places` (session 0) and an empty session 1 the queries are stored in.
+SessionMap mapOfRoute(const Config& c, const std::vector<FrameDescriptor>& places)
+{
   SessionMap map(layoutOf(c), c.toYaml());
   const uint32_t stored = map.addSession({"first", "", 0.0});
   for (const FrameDescriptor& f : places)
     map.add(stored, f);
-  const uint32_t own = map.addSession({"own", "", 0.0});
+  map.addSession({"own", "", 0.0});
+  return map;
+}
+constexpr uint32_t kRoute = 0, kOwn = 1;  // mapOfRoute's sessions
+}  // namespace
+
+TEST(MapMatcher, ReliefIsTheSpreadOfTheMatchsNeighboursInStandardDeviationsOfTheRow)
+{
+  // Reference: the query's frame distances to every place compared (a plain loop over the row), their population
+  // standard deviation, and the largest minus the smallest within uniqueness_window of the best match.
+  const Config c = reliefConfig(4);
+  std::mt19937_64 rng(11);
+  const std::vector<FrameDescriptor> places = route(rng, 60);
+  const SessionMap map = mapOfRoute(c, places);
   MapMatcher matcher(c, map.layout(), false);
   const FrameMetric metric(map.layout());
   const double scale = static_cast<double>(map.layout().maxFrameDistance());
   for (int t = 0; t < 25; ++t)
   {
     const FrameDescriptor query = revisit(places[static_cast<size_t>(2 * t + 3)], rng);
-    const Detection d = matcher.match(query, map, static_cast<int>(own), 0.0);
+    const Detection d = matcher.match(query, map, static_cast<int>(kOwn), 0.0);
     ASSERT_TRUE(d.has_candidates);
     std::vector<double> row;
     for (size_t j = 0; j < places.size(); ++j)
-      row.push_back(metric.distance(query.data(), map.frames(stored).descriptor(j)) / scale);
+      row.push_back(metric.distance(query.data(), map.frames(kRoute).descriptor(j)) / scale);
     double mean = 0.0, squares = 0.0;
     for (double v : row)
       mean += v / static_cast<double>(row.size());
@@ -471,11 +489,7 @@ TEST(MapMatcher, ReliefIsTheSpreadOfTheMatchsNeighboursInStandardDeviationsOfThe
 
 TEST(MapMatcher, ReliefIsNearZeroAmongLookAlikePlacesAndUnknownWithoutTheRowsSpread)
 {
-  Config c = ldbConfig();
-  c.max_pace = 3;
-  c.sequence_length = 1;
-  c.exclusion_window = 0;
-  c.uniqueness_window = 5;
+  const Config c = reliefConfig(5);
   std::mt19937_64 rng(12);
   std::vector<FrameDescriptor> places = route(rng, 50);
   for (size_t j = 15; j < 40; ++j)  // a snowfield: places that differ from place 27 by a bit or two
@@ -484,13 +498,9 @@ TEST(MapMatcher, ReliefIsNearZeroAmongLookAlikePlacesAndUnknownWithoutTheRowsSpr
     if (j != 27)
       places[j][j % places[j].size()] ^= (j % 2 ? 1u : 3u);
   }
-  SessionMap map(layoutOf(c), c.toYaml());
-  const uint32_t stored = map.addSession({"first", "", 0.0});
-  for (const FrameDescriptor& f : places)
-    map.add(stored, f);
-  const uint32_t own = map.addSession({"own", "", 0.0});
+  const SessionMap map = mapOfRoute(c, places);
   MapMatcher pace(c, map.layout(), false);
-  const Detection flat = pace.match(places[27], map, static_cast<int>(own), 0.0);
+  const Detection flat = pace.match(places[27], map, static_cast<int>(kOwn), 0.0);
   ASSERT_TRUE(flat.has_candidates);
   EXPECT_EQ(flat.best.id, 27u);
   EXPECT_LT(flat.relief, 0.1f);  // 2 bits of 256 among neighbours, against a row spread of about a quarter
@@ -498,5 +508,5 @@ TEST(MapMatcher, ReliefIsNearZeroAmongLookAlikePlacesAndUnknownWithoutTheRowsSpr
   Config paper = c;
   paper.max_pace = 1;  // the paper's SequenceMatcher keeps no spread of the row
   MapMatcher diagonal(paper, map.layout(), false);
-  EXPECT_TRUE(std::isnan(diagonal.match(places[27], map, static_cast<int>(own), 0.0).relief));
+  EXPECT_TRUE(std::isnan(diagonal.match(places[27], map, static_cast<int>(kOwn), 0.0).relief));
 }

@@ -1,6 +1,7 @@
 #include "openable/detection/loop_decision.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 
@@ -168,9 +169,11 @@ bool LoopDecision::featureless() const
   // were right because a stretch ended before the sequence had drifted: nothing in the frames said so.
   if (options_.min_relief <= 0.0 || reliefs_.empty())
     return false;
-  std::vector<float> sorted(reliefs_.begin(), reliefs_.end());
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
-  return sorted[sorted.size() / 2] < options_.min_relief;
+  std::array<float, kReliefFrames> sorted;
+  const auto end = std::copy(reliefs_.begin(), reliefs_.end(), sorted.begin());
+  const auto middle = sorted.begin() + static_cast<long>(reliefs_.size() / 2);
+  std::nth_element(sorted.begin(), middle, end);
+  return *middle < options_.min_relief;
 }
 
 bool LoopDecision::advancesWithRun(const Detection& detection) const
@@ -341,7 +344,7 @@ FrameStatus LoopDecision::coast(const Detection& detection)
   // stretch of look-alike places is the same run after it (its frames before the stretch may still be reached
   // back to, its line still holds). Nordland's short route through a stretch of 8 such places (frames 300-399 at
   // 2x) kept 16 of its 41 right loops where the run ended there, 37 where it coasts.
-  if (run_ > 0 && advancesWithRun(detection))
+  if (advancesWithRun(detection))  // (never without a run)
     extendRun(detection);
   else
     endRun();

@@ -171,11 +171,11 @@ float MapMatcher::reliefAround(const SessionMap& map, const Candidate& best) con
   // to the pass over the row): a sequence localises by how these differ, and where they do not (Nordland's
   // snowfields, every place within 10 of the match as far from the query as its match), a path drifts along
   // the stretch unnoticed: all of the 12 wrong loops of Nordland summer then winter at 1x (doc/results.md).
-  const float spread = matchers_[best.session]->rowSpread();
+  const RowMatcher& matcher = *matchers_[best.session];
+  const float spread = matcher.rowSpread();
   if (!std::isfinite(spread))
     return std::nanf("");
   const PlaceDatabase& frames = map.frames(best.session);
-  const RowMatcher& matcher = *matchers_[best.session];
   const uint64_t window = static_cast<uint64_t>(std::max(0, options_.uniqueness_window));
   const uint64_t first = std::max({frames.firstId(), matcher.firstId(), best.id > window ? best.id - window : 0});
   const uint64_t last = std::min(best.id + window, matcher.firstId() + matcher.columns() - 1);
