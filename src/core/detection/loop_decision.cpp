@@ -163,8 +163,8 @@ bool LoopDecision::featureless() const
 {
   // Where the places around the match look alike, a sequence has nothing to place it by: it drifts along the
   // stretch at the pace it came in with, unique (nothing else on the route looks like it) and consistent. Measured
-  // on Nordland summer then winter (default.yaml), winter 506-546, every place within 10 of the match as far from
-  // the query as the match (relief 0.2-0.4 where Gardens Point's never falls below 0.9): all 12 wrong loops at 1x,
+  // on Nordland summer then winter (default.yaml), winter 506-546, every place within 10 of the match about as far
+  // from the query as the match (relief 0.4-0.6 where Gardens Point's never falls below 1.1): all 12 wrong loops at 1x,
   // 24 of 24 at 0.5x, about a quarter at changing paces. The right loops lost there (recall 0.917 -> 0.893 at 1x)
   // were right because a stretch ended before the sequence had drifted: nothing in the frames said so.
   if (options_.min_relief <= 0.0 || reliefs_.empty())
