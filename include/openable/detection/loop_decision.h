@@ -135,8 +135,9 @@ private:
   /// The frame passed the gates (or geometry stood in for them): the run goes on or starts with it. Returns
   /// Published once the run is consistent, else Inconsistent.
   FrameStatus joinRun(const Detection& detection);
-  /// The run goes on (or starts) with the frame's match: its count, its line, its last match.
-  void extendRun(const Detection& detection);
+  /// The run goes on with the frame's match where it `advances` with it (advancesWithRun), else starts again
+  /// from it: its count, its line, its last match.
+  void extendRun(const Detection& detection, bool advances);
   /// A featureless frame: the run goes on through it where its match advances with the run, and it is never
   /// published (Featureless).
   FrameStatus coast(const Detection& detection);

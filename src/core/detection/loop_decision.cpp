@@ -345,15 +345,15 @@ FrameStatus LoopDecision::coast(const Detection& detection)
   // back to, its line still holds). Nordland's short route through a stretch of 8 such places (frames 300-399 at
   // 2x) kept 16 of its 41 right loops where the run ended there, 37 where it coasts.
   if (advancesWithRun(detection))  // (never without a run)
-    extendRun(detection);
+    extendRun(detection, true);
   else
     endRun();
   return FrameStatus::Featureless;
 }
 
-void LoopDecision::extendRun(const Detection& detection)
+void LoopDecision::extendRun(const Detection& detection, bool advances)
 {
-  if (advancesWithRun(detection))
+  if (advances)
     ++run_;
   else
   {
@@ -371,7 +371,7 @@ void LoopDecision::extendRun(const Detection& detection)
 
 FrameStatus LoopDecision::joinRun(const Detection& detection)
 {
-  extendRun(detection);
+  extendRun(detection, advancesWithRun(detection));
   const bool was_published = published_ && run_ > 1;
   published_ = run_ >= options_.consistent_frames && recentFramesFollowOneLine();
   if (published_ && !was_published)
