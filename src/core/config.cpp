@@ -245,6 +245,7 @@ Config Config::paper()
   c.max_pace = 1;
   c.pace_tolerance = 1;
   c.slip_penalty = 0.0;
+  c.pace_prior = 0.0;
   c.standstill_distance = 0.0;
   c.consistent_frames = 4;
   c.min_candidates = 60;

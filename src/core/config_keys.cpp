@@ -154,6 +154,10 @@ const std::vector<KeyAccess>& table()
               "cost of a sequence moving one place off its line in a frame (a revisit between two of the paces "
               "followed, or drifting), as a fraction of pace_penalty; 0 = never (max_pace > 1)",
               &Config::slip_penalty).range(0, 10).live(),
+      makeKey("pace_prior",
+              "while no loop closure is published, what a sequence at a pace 30 % or more from the first pass's pays "
+              "to be its place's best, as a fraction of pace_penalty (less nearer 1x); 0 = every pace alike (max_pace > 1)",
+              &Config::pace_prior).range(0, 10).live(),
       makeKey("pace_tolerance",
               "places a sequence may be off its line in each frame, for paces between the ones followed (max_pace > 1)",
               &Config::pace_tolerance).range(0, 2).live(),

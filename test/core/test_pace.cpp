@@ -84,6 +84,23 @@ public:
       }
     for (size_t j = 0; j < n; ++j)
       best[j] += (1.0f - keep) * (raw[j] - d[j]);
+    // While searching, a place's cost is its paths' with the pace prior: a pace 30 % or more from 1x pays
+    // prior x change, one nearer in proportion to |ln pace|; each pace's own cost and the recurrence unchanged.
+    const float change = keep > 0.0f ? penalty_ * spread_ * std::sqrt((1.0f - keep) / (1.0f + keep)) : 0.0f;
+    with_prior_ = best;
+    if (searching_ && pace_prior_ > 0.0f && keep > 0.0f)
+      for (size_t j = 0; j < n; ++j)
+      {
+        float lowest = 1e30f, priced = 1e30f;
+        for (size_t v = 0; v < paces_.size(); ++v)
+        {
+          const double pace = double(std::abs(paces_[v].first)) / paces_[v].second;
+          const float away = float(std::min(1.0, std::fabs(std::log(pace)) / std::log(1.3)));
+          lowest = std::min(lowest, costs[j][v]);
+          priced = std::min(priced, costs[j][v] + pace_prior_ * change * away);
+        }
+        with_prior_[j] = best[j] - lowest + priced;
+      }
     costs_ = costs;
     best_ = best;
     double sum = 0.0, squares = 0.0;
@@ -103,6 +120,19 @@ public:
   {
     return best_[j];
   }
+  /// best(), with the pace prior while searching (from the next frame on, as PaceMatcher).
+  float withPrior(size_t j) const
+  {
+    return with_prior_[j];
+  }
+  void setPrior(float prior)
+  {
+    pace_prior_ = prior;
+  }
+  void setSearching(bool searching)
+  {
+    searching_ = searching;
+  }
 
 private:
   FrameMetric metric_;
@@ -112,6 +142,9 @@ private:
   float slip_;
   std::vector<std::vector<float>> costs_;
   std::vector<float> best_;
+  std::vector<float> with_prior_;
+  float pace_prior_ = 0.0f;
+  bool searching_ = true;
   float prior_ = 0.0f;
   float spread_ = 0.0f;
   uint64_t t_ = 0;
@@ -149,6 +182,56 @@ TEST(PaceMatcher, StaysWithinItsRoundingOfTheFloatRecurrenceAcrossChunksGrowthAn
               << "frame " << t << " column " << j << (bidirectional ? " (bidirectional)" : "") << " slip " << slip;
       }
     }
+}
+
+// The pace prior while searching (PaceOptions::prior): each place's cost is its paths' with the prior, the same
+// rounding from the plain float reference, across chunks (60 places join a frame: 2,400 places, two chunks);
+// on frames that are not searching the costs are the plain ones, and the recurrence itself never changes (after
+// any mix of searching frames, a frame that does not search gives what a matcher without the prior gives).
+TEST(PaceMatcher, APriorWhileSearchingMatchesTheReferenceAndLeavesTheRecurrenceAlone)
+{
+  const DescriptorLayout layout = binaryLayout(128);
+  std::mt19937_64 rng(23);
+  PlaceDatabase reference(layout);
+  PaceOptions options;
+  options.slip = 0.35f;
+  options.prior = 0.24f;
+  PaceMatcher matcher(layout, 7, false, options);
+  options.prior = 0.0f;
+  PaceMatcher plain(layout, 7, false, options);
+  NaivePace naive(layout, 7, matcher.paces(), 3.0f, 0.35f);
+  naive.setPrior(0.24f);
+  std::vector<size_t> taken;
+  for (int t = 0; t < 40; ++t)
+  {
+    for (int k = 0; k < 60; ++k)
+      reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+    const auto query = openable_test::randomWords(rng, 2);
+    const bool searching = t % 7 != 3;  // a run published now and then
+    matcher.setSearching(searching);
+    naive.setSearching(searching);
+    const size_t candidates = reference.size() - 5;
+    matcher.match(query.data(), reference, candidates);
+    plain.match(query.data(), reference, candidates);
+    naive.match(query.data(), reference, candidates);
+    size_t lowest = 0;
+    for (size_t j = 0; j < candidates; ++j)
+    {
+      ASSERT_NEAR(matcher.normalized(j), std::min(1.0f, naive.withPrior(j)), (3.0f * 7 + 4) / 32767.0f)
+          << "frame " << t << " column " << j;
+      if (!searching)
+        ASSERT_EQ(matcher.normalized(j), plain.normalized(j)) << "frame " << t << " column " << j;
+      else if (t > 0)
+        ASSERT_GE(matcher.normalized(j), plain.normalized(j)) << "frame " << t << " column " << j;
+      if (matcher.normalized(j) < matcher.normalized(lowest))
+        lowest = j;
+    }
+    // The best place is the smallest cost with the prior (the chunks' minima carry it).
+    matcher.smallestDistinct(1, 10, 1, taken);
+    ASSERT_EQ(taken.size(), 1u);
+    EXPECT_EQ(taken[0], lowest) << "frame " << t;
+  }
+  EXPECT_THROW(PaceMatcher(layout, 7, false, PaceOptions{3, 3.0f, 0.0f, 0, -0.1f}), Error);
 }
 
 TEST(PaceMatcher, PacesSpanTheRangeWithOneExactly)

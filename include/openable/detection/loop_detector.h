@@ -81,6 +81,12 @@ public:
   /// Forgets the stream: its query sequences and, unless localising, the frames it stored (loaded
   /// sessions stay).
   void reset();
+  /// Whether the stream is looking for a loop: no loop closure was published at the last frame (the decision's
+  /// outcome, MapMatcher::setSearching).
+  void setSearching(bool searching)
+  {
+    matcher_.setSearching(searching);
+  }
 
 private:
   Config config_;

@@ -77,6 +77,7 @@ struct MatchOptions
   double pace_penalty;
   int pace_tolerance;
   double slip_penalty;        ///< a fraction of pace_penalty (PaceMatcher)
+  double pace_prior;          ///< a fraction of pace_penalty (PaceMatcher), while searching
   int exclusion_window;       ///< own-session frames too recent to be candidates
   double exclusion_seconds;   ///< the same in seconds of stamp
   int top_k;
@@ -104,6 +105,9 @@ public:
   void setOptions(const MatchOptions& options);
   /// Forgets the query stream.
   void reset();
+  /// Whether the stream is looking for a loop (RowMatcher::setSearching), for every session's matcher from the next
+  /// frame on; matchers made later start searching.
+  void setSearching(bool searching);
 
   int sequenceLength() const
   {

@@ -98,6 +98,7 @@ struct PaceOptions
   float penalty = 3.0f;  ///< a change of pace, in standard deviations of a path's cost under noise
   float slip = 0.0f;     ///< a path one place off its line in a frame, as a fraction of `penalty` (0 = never)
   int tolerance = 1;     ///< places a path may be off its line in each frame (0 .. 2)
+  float prior = 0.0f;    ///< while searching, a pace 30 % or more from 1x pays this fraction of `penalty` (0 = off)
   PaceKernel kernel = PaceKernel::kBest;  ///< tests and benchmarks pick one; Error when the CPU lacks it
 };
 
@@ -134,6 +135,10 @@ public:
   size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
   void setSequenceLength(int sequence_length) override;
   void setBidirectional(bool bidirectional) override;
+  void setSearching(bool searching) override
+  {
+    searching_ = searching;
+  }
   void reset() override;
 
   int maxPace() const
@@ -169,6 +174,13 @@ private:
   /// The smallest normalized() of chunk `chunk`, leaving out columns within `window` of a taken one.
   float chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const;
   float value(size_t column, int* direction) const;
+  /// A place's cost with the pace prior (prior_active_): M - min_v C[j, v] + min_v (C[j, v] + prior[v]), in the
+  /// fixed point (M differs from min_v C by the own-distance term of pace_tolerance).
+  int32_t costWithPrior(size_t column) const;
+  /// The smallest costWithPrior() of a chunk's m places, from the costs just written (rows[v].to).
+  int32_t chunkMinimumWithPrior(size_t chunk, size_t m, const std::vector<int16_t*>& written);
+  /// The cost of this frame's pace v: C[j, v] from the buffer that holds it.
+  int16_t costAt(size_t column, size_t pace) const;
   /// The index in slopes_ of the pace of the column's best path (the first of the smallest costs).
   size_t paceIndex(size_t column) const;
 
@@ -179,6 +191,11 @@ private:
   float step_penalty_;
   float slip_penalty_;  ///< fraction of a change of pace; 0 = paths never leave their line
   int tolerance_;
+  float prior_fraction_;  ///< PaceOptions::prior
+  bool searching_ = true;
+  bool prior_active_ = false;  ///< the last frame's costs carry the prior (searching, prior_fraction_ > 0)
+  std::vector<int32_t> pace_prior_;  ///< per pace, in the fixed point, for the last frame
+  std::vector<int32_t> lowest_, with_prior_;  ///< scratch of chunkMinimumWithPrior()
   pace_kernels::ChunkSums (*kernel_)(const pace_kernels::Chunk&);  ///< chosen once: the CPU and max_pace decide
   std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
   float keep_ = 0.0f;                        ///< a = 1 - 1/L, the weight of the path so far

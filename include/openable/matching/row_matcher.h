@@ -49,6 +49,12 @@ public:
   /// Restarts every sequence (the history of query frames is kept).
   virtual void setSequenceLength(int sequence_length) = 0;
   virtual void setBidirectional(bool bidirectional) = 0;
+  /// Whether the stream is looking for a loop (no loop closure published at its last stored frame): from the next
+  /// frame, PaceMatcher judges each place by its paths near the first pass's pace first (PaceOptions::prior).
+  virtual void setSearching(bool searching)
+  {
+    (void)searching;
+  }
   /// Forgets every query frame and every sequence.
   virtual void reset() = 0;
 };

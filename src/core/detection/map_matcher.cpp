@@ -25,6 +25,7 @@ MatchOptions MatchOptions::from(const Config& config)
   o.pace_penalty = config.pace_penalty;
   o.pace_tolerance = config.pace_tolerance;
   o.slip_penalty = config.slip_penalty;
+  o.pace_prior = config.pace_prior;
   o.exclusion_window = config.exclusion_window;
   o.exclusion_seconds = config.exclusion_seconds;
   o.top_k = config.top_k;
@@ -51,6 +52,7 @@ std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layo
   pace.penalty = static_cast<float>(options_.pace_penalty);
   pace.tolerance = options_.pace_tolerance;
   pace.slip = static_cast<float>(options_.slip_penalty);
+  pace.prior = static_cast<float>(options_.pace_prior);
   return std::make_unique<PaceMatcher>(layout, options_.sequence_length, options_.bidirectional, pace);
 }
 
@@ -221,7 +223,7 @@ void MapMatcher::setOptions(const MatchOptions& options)
   const bool new_kind = (options.max_pace <= 1) != (options_.max_pace <= 1) || options.max_pace != options_.max_pace ||
                         options.pace_penalty != options_.pace_penalty ||
                         options.pace_tolerance != options_.pace_tolerance ||
-                        options.slip_penalty != options_.slip_penalty;
+                        options.slip_penalty != options_.slip_penalty || options.pace_prior != options_.pace_prior;
   if (new_kind)
   {
     options_ = options;
@@ -237,6 +239,12 @@ void MapMatcher::setOptions(const MatchOptions& options)
       matcher->setBidirectional(options.bidirectional);
   }
   options_ = options;
+}
+
+void MapMatcher::setSearching(bool searching)
+{
+  for (auto& matcher : matchers_)
+    matcher->setSearching(searching);
 }
 
 void MapMatcher::reset()

@@ -302,6 +302,9 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.status = decision_.decide(outcome.detection,
                                     options_.verify ? LoopDecision::GeometryCheck(verifyOnce) : nullptr);
   outcome.score = decision_.score(outcome.detection);
+  // The matcher follows the decision's run (what verification does with it comes after): a stream whose loops are
+  // only flagged unverified matches as one whose loops are published.
+  detector_.setSearching(outcome.status != FrameStatus::Published);
   // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
   // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
   const bool run_start = outcome.status == FrameStatus::Inconsistent && decision_.mayJoinLater();

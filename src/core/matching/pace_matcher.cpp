@@ -23,6 +23,8 @@ constexpr float kNoPath = 1e30f;
 /// in steps of a factor kPaceStep, 1 exactly among them. Between two neighbours a straight line drifts by one
 /// place in about 1 / (pace * (kPaceStep - 1)) frames.
 constexpr double kPaceStep = 1.15;
+/// The pace prior's full price from this pace (1.3x, 1 / 1.3x) on: the two paces followed next to 1x pay part of it.
+constexpr double kPriorPace = 1.3;
 std::vector<std::pair<int, int>> slopesFor(int max_pace)
 {
   const int steps = static_cast<int>(std::ceil(std::log(static_cast<double>(max_pace)) / std::log(kPaceStep)));
@@ -73,6 +75,7 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     step_penalty_(options.penalty),
     slip_penalty_(options.slip),
     tolerance_(options.tolerance),
+    prior_fraction_(options.prior),
     kernel_(pace_kernels::kernelFor(options.kernel, long(options.max_pace) + 1))  // throws now, not at a frame
 {
   if (max_pace_ < 1 || max_pace_ > 64)
@@ -81,6 +84,8 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     throw Error("pace_penalty must be finite and >= 0");
   if (!std::isfinite(slip_penalty_) || slip_penalty_ < 0.0f)
     throw Error("slip_penalty must be finite and >= 0 (a fraction of pace_penalty; 0 = off)");
+  if (!std::isfinite(prior_fraction_) || prior_fraction_ < 0.0f)
+    throw Error("pace_prior must be finite and >= 0 (a fraction of pace_penalty; 0 = off)");
   if (tolerance_ < 0 || tolerance_ > 2)
     throw Error("pace_tolerance " + std::to_string(tolerance_) + " is out of range; expected 0..2 places");
   setSequenceLength(sequence_length);
@@ -88,6 +93,8 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
   entry_.resize(kChunk);
   extra_.resize(kChunk);
   smallest_.resize(kChunk);
+  lowest_.resize(kChunk);
+  with_prior_.resize(kChunk);
 }
 
 void PaceMatcher::setSequenceLength(int sequence_length)
@@ -118,6 +125,8 @@ void PaceMatcher::reset()
   margin_ = (pad_ + 31) / 32 * 32;
   segment_ = kChunk + 2 * margin_;
   queries_ = 0;
+  searching_ = true;
+  prior_active_ = false;
   evidence_ = 0;
   columns_ = 0;
   costs_.clear();
@@ -255,6 +264,25 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.entry_scale = static_cast<float>((32768.0 - keep_fixed) / 32768.0 * pace_kernels::kOne / max_distance);
   chunk.change =
       static_cast<int16_t>(std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
+  // While the stream looks for a loop, a place is judged by its paths near the first pass's pace first: of the 17
+  // paces' noisy paths at a place the revisit does not pass, the smallest is lower than any one of them, so a
+  // wrong place gains more from the other paces than the right one, whose path has one pace; and at the start of a
+  // revisit a path's first frames fit any pace (a lead of 3 or 4 places on a 1.5x path, a creeping 0.33x one). A
+  // pace pays prior x change x min(1, |ln pace| / ln 1.3) to be its place's best (each pace's own cost and the
+  // recurrence unchanged): GP day_right then day_left 1x 0.735 -> 0.865, its 60-frame short route 0.200 -> 0.700.
+  // Once a loop is published the run's place is followed at whatever pace it goes (always on: a revisit at 1.25x
+  // lost 0.925 -> 0.662, and Nordland's changing paces gained wrong loops; doc/results.md "A pace prior while
+  // searching").
+  prior_active_ = searching_ && prior_fraction_ > 0.0f && keep > 0.0f;
+  if (prior_active_)
+  {
+    pace_prior_.resize(slopes_.size());
+    for (size_t v = 0; v < slopes_.size(); ++v)
+    {
+      const double away = std::min(1.0, std::fabs(std::log(placesPerFrame(slopes_[v]))) / std::log(kPriorPace));
+      pace_prior_[v] = static_cast<int32_t>(std::lround(double(prior_fraction_) * double(chunk.change) * away));
+    }
+  }
   // A slip costs a fraction of a change of pace (slip_penalty 0: paths never leave their line; the kernels skip the term).
   chunk.slips = slip_penalty_ > 0.0f;
   chunk.tolerance = tolerance_;
@@ -293,6 +321,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.old_best = old_best_.data() + pad_;
   chunk.best = best_.data() + pad_;
   uint64_t distance_sum = 0, square_sum = 0;
+  std::vector<int16_t*> written(paces);
   // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
   for (size_t k = 0; k < chunks; ++k)
   {
@@ -324,6 +353,12 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     distance_sum += sums.sum;
     square_sum += sums.squares;
     chunk_minimum_[k] = costOf(sums.minimum);
+    if (prior_active_)
+    {
+      for (size_t v = 0; v < paces; ++v)
+        written[v] = rows[v].to;
+      chunk_minimum_[k] = static_cast<float>(chunkMinimumWithPrior(k, chunk.m, written)) / pace_kernels::kOne;
+    }
   }
   flipped_ = bidirectional_ && !flipped_;
   const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
@@ -332,10 +367,49 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   spread_ = static_cast<float>(std::sqrt(std::max(0.0, squares - mean * mean)));
 }
 
+int16_t PaceMatcher::costAt(size_t column, size_t pace) const
+{
+  return current(pace)[(column / kChunk * slopes_.size() + pace) * segment_ + margin_ + column % kChunk];
+}
+
+int32_t PaceMatcher::costWithPrior(size_t column) const
+{
+  int32_t lowest = std::numeric_limits<int32_t>::max(), with_prior = std::numeric_limits<int32_t>::max();
+  for (size_t v = 0; v < slopes_.size(); ++v)
+  {
+    const int32_t c = costAt(column, v);
+    lowest = std::min(lowest, c);
+    with_prior = std::min(with_prior, c + pace_prior_[v]);
+  }
+  return int32_t(best_[pad_ + column]) - lowest + with_prior;
+}
+
+int32_t PaceMatcher::chunkMinimumWithPrior(size_t chunk, size_t m, const std::vector<int16_t*>& written)
+{
+  // costWithPrior() for the chunk's places pace by pace (each pace's costs one run of memory, still in L2), so
+  // the loops vectorise; the same integers as costWithPrior(), which smallestDistinct() compares with.
+  std::fill(lowest_.begin(), lowest_.begin() + long(m), std::numeric_limits<int32_t>::max());
+  std::fill(with_prior_.begin(), with_prior_.begin() + long(m), std::numeric_limits<int32_t>::max());
+  for (size_t v = 0; v < written.size(); ++v)
+  {
+    const int16_t* costs = written[v];
+    const int32_t prior = pace_prior_[v];
+    for (size_t i = 0; i < m; ++i)
+    {
+      lowest_[i] = std::min(lowest_[i], int32_t(costs[i]));
+      with_prior_[i] = std::min(with_prior_[i], int32_t(costs[i]) + prior);
+    }
+  }
+  const int16_t* best = best_.data() + pad_ + chunk * kChunk;
+  int32_t minimum = std::numeric_limits<int32_t>::max();
+  for (size_t i = 0; i < m; ++i)
+    minimum = std::min(minimum, int32_t(best[i]) - lowest_[i] + with_prior_[i]);
+  return minimum;
+}
+
 size_t PaceMatcher::paceIndex(size_t column) const
 {
-  const auto cost = [&](size_t v)
-  { return current(v)[(column / kChunk * slopes_.size() + v) * segment_ + margin_ + column % kChunk]; };
+  const auto cost = [&](size_t v) { return int32_t(costAt(column, v)) + (prior_active_ ? pace_prior_[v] : 0); };
   size_t index = 0;
   for (size_t v = 1; v < slopes_.size(); ++v)
     if (cost(v) < cost(index))
@@ -347,6 +421,8 @@ float PaceMatcher::value(size_t column, int* direction) const
 {
   if (direction)
     *direction = slopes_[paceIndex(column)].first > 0 ? 1 : -1;
+  if (prior_active_)
+    return static_cast<float>(costWithPrior(column)) / pace_kernels::kOne;
   return costOf(best_[pad_ + column]);
 }
 
