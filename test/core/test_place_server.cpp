@@ -213,10 +213,10 @@ TEST(PlaceServer, TwoServersThatSplitTheSessionsPublishTheSameLoopClosuresAsOne)
   EXPECT_EQ(merged.sessionNames(), single.sessionNames());
 
   // The robots never walk their own route twice: every loop closure is between robots. Measured on the
-  // hardest pair of Gardens Point (day/night and left/right side): 19 published, all within 2 frames of the
-  // true place (precision 1.0), recall 19 / 400 queries = 0.0475. Few, because a frame needs 60 places to
-  // compare with (min_candidates) and 10 consistent frames, and the pair is hard (recall@1 0.6 with L = 20);
-  // fed one robot after the other instead, night_right publishes 20 of its 200 frames, all right.
+  // hardest pair of Gardens Point (day/night and left/right side): 85 published, 84 within 2 frames of the
+  // true place and one 3 frames off (night_right 40 as day_left 37, the first frame of a run), precision
+  // 0.988, recall 84 / 400 queries = 0.21 (19 published, 0.0475, before pace_prior: a frame needs 60 places
+  // to compare with (min_candidates) and 10 consistent frames, and the pair is hard, recall@1 0.6 with L = 20).
   const double precision = inter ? double(correct_inter) / inter : 0.0;
   const double recall = correct_inter / 400.0;
   RecordProperty("inter_robot_published", inter);
@@ -225,7 +225,7 @@ TEST(PlaceServer, TwoServersThatSplitTheSessionsPublishTheSameLoopClosuresAsOne)
   std::printf("inter-robot loop closures: %d published, precision %.3f, recall %.3f\n", inter, precision, recall);
   EXPECT_EQ(inter, published);
   EXPECT_GE(precision, 0.95);
-  EXPECT_GE(recall, 0.045);
+  EXPECT_GE(recall, 0.2);
 }
 
 TEST(PlaceServer, SavesAndLoadsItsMapAndRefusesAnotherConfiguration)

@@ -178,9 +178,12 @@ TEST(OfflineTool, CameraInfoVerifiesLoopClosuresAsANodeletWould)
   // what is tested here is verification, not the default's recall on short routes. No run resumes
   // (run_resume_frames 0): a frame that verification rejects breaks a run where the plain run goes on, and the
   // line a later frame would resume differs, so "verification only removes loops" would not hold frame by frame.
+  // No pace prior (pace_prior 0) for the same reason: the matcher weighs paces while no run is published, and a
+  // run that verification ends earlier leaves the matcher searching where the plain run's is not.
   const std::string base =
       "--config " + std::string(OPENABLE_SOURCE_DIR) +
-      "/config/default.yaml --set consistent_frames=4 --set slip_penalty=0 --set run_resume_frames=0 --quiet "
+      "/config/default.yaml --set consistent_frames=4 --set slip_penalty=0 --set run_resume_frames=0 "
+      "--set pace_prior=0 --quiet "
       "--reference " +
       in + " --output ";
   const std::string camera =
