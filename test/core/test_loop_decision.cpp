@@ -178,6 +178,36 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
   EXPECT_EQ(off.joinedBefore().size(), 0u);
 }
 
+// A run's own frames that were published and then held (the run broke before they were confirmed) passed the
+// gates on their run's line: a new run whose line passes within consistency_tolerance of them takes them, when
+// the frame after each joined too; the frames that never passed keep run_start_tolerance.
+TEST(LoopDecision, HeldFramesOfABrokenRunJoinWithinConsistencyTolerance)
+{
+  Config c = decisionConfig();
+  c.consistent_frames = 4;
+  c.consistency_tolerance = 2;
+  c.max_pace = 3;
+  c.run_start_tolerance = 1;
+  LoopDecision decision(c);
+  const std::vector<uint64_t> matches = {13, 14, 16, 17, 18, 21, 22, 22, 23, 23, 24};
+  const std::vector<FrameStatus> statuses = {
+      FrameStatus::Inconsistent, FrameStatus::Inconsistent, FrameStatus::Inconsistent, FrameStatus::Published,
+      FrameStatus::Published,    FrameStatus::Published,    FrameStatus::Published,    FrameStatus::Published,
+      FrameStatus::Published,    FrameStatus::Inconsistent, FrameStatus::Published};
+  for (size_t k = 0; k < matches.size(); ++k)
+    EXPECT_EQ(decision.decide(candidate(matches[k], 0.3f)), statuses[k]) << k;
+  // The line through the last four matches (22, 23, 23, 24: 2/3 of a place a frame), extended back: 23, 22, 22 and
+  // 21 lie within 1 of it; 18, a published frame right before them, 2 places (20 on the line) joins too; 17 is 2.33
+  // off and ends the reach-back.
+  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 2, 3, 4, 5, 6}));
+
+  c.consistency_tolerance = 1;  // the run's own frames held no looser than the frames before a run
+  LoopDecision tight(c);
+  for (size_t k = 0; k < matches.size(); ++k)
+    tight.decide(candidate(matches[k], 0.3f));
+  EXPECT_EQ(tight.joinedBefore(), (std::vector<size_t>{1, 2, 3, 4, 5}));
+}
+
 // A published run broken by a dip of uniqueness resumes where a frame's match lies on its line, extended, at
 // continue_uniqueness (run_resume_frames); never off the line, never after run_resume_frames frames, never with 0.
 TEST(LoopDecision, ABrokenRunResumesOnItsLineWithinRunResumeFrames)
@@ -308,7 +338,8 @@ void expectNaiveReference(bool geometry)
         // frame here has candidates; a published one may still be held by the confirmation) within
         // run_start_tolerance of the line through the run's first and last match, extended back, join it, counted
         // back to the first that is not, passing over at most kMaxSkipped NotUnique ones in a row (at most kMaxJoined
-        // back).
+        // back). A Published one right after a joined one (or right before this frame) may be consistency_tolerance
+        // off the line.
         if (run == c.consistent_frames && c.run_start_tolerance >= 0 && run > 1)
         {
           const double slope = (matches.back() - matches.front()) / static_cast<double>(matches.size() - 1);
@@ -316,7 +347,11 @@ void expectNaiveReference(bool geometry)
           for (size_t back = 1; back <= std::min(statuses.size(), LoopDecision::kMaxJoined); ++back)
           {
             const double line = matches.back() - slope * static_cast<double>(back);
-            if (std::fabs(double(seen[seen.size() - 1 - back].best.id) - line) <= c.run_start_tolerance)
+            const bool held_run_frame = statuses[statuses.size() - back] == FrameStatus::Published &&
+                                        (joined.empty() ? back == 1 : joined.back() == back - 1);
+            const int tolerance =
+                held_run_frame ? std::max(c.run_start_tolerance, c.consistency_tolerance) : c.run_start_tolerance;
+            if (std::fabs(double(seen[seen.size() - 1 - back].best.id) - line) <= tolerance)
             {
               joined.push_back(back);
               off_line = 0;

@@ -220,9 +220,13 @@ TEST(PaceMatcher, APriorWhileSearchingMatchesTheReferenceAndLeavesTheRecurrenceA
       ASSERT_NEAR(matcher.normalized(j), std::min(1.0f, naive.withPrior(j)), (3.0f * 7 + 4) / 32767.0f)
           << "frame " << t << " column " << j;
       if (!searching)
+      {
         ASSERT_EQ(matcher.normalized(j), plain.normalized(j)) << "frame " << t << " column " << j;
+      }
       else if (t > 0)
+      {
         ASSERT_GE(matcher.normalized(j), plain.normalized(j)) << "frame " << t << " column " << j;
+      }
       if (matcher.normalized(j) < matcher.normalized(lowest))
         lowest = j;
     }

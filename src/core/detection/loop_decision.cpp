@@ -396,6 +396,12 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
   // reach-back there, with the frames before them on the line. A frame unique enough but off the line is not a
   // look-alike place: the run's own sequence disagreed there (a lagging start), and the reach-back ends (passing
   // over those too joined frames 3 places off at the start of a session continued from a map).
+  // A held published frame (its run broke before confirm_frames more went on with it) passed the gates and kept to
+  // its own run's line within consistency_tolerance: it joins a run whose line passes that close, when the frame
+  // after it joined too. Where the pace eases for a few frames the sequence lags, its run breaks as the match jumps
+  // back onto the route, and the lagging frames were 2 places off the new run's line: GP day_right then day_left
+  // 0.865 -> 0.900. Not across a gap: a stretch of look-alike places leaves the sequence lagging 2 places, every
+  // other frame published and not unique in turn (Nordland summer then winter, default.yaml, 4 wrong at 1x).
   std::vector<size_t> joined;
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return joined;
@@ -410,7 +416,11 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
     if (!(p->may_join || p->status == FrameStatus::Published) || p->direction != previous_direction_ || p->session != previous_session_)
       break;
     const double expected = last - slope * static_cast<double>(back);
-    if (std::fabs(static_cast<double>(p->id) - expected) <= options_.run_start_tolerance)
+    const bool follows_joined = joined.empty() ? back == 1 : joined.back() + 1 == back;
+    const double tolerance = p->status == FrameStatus::Published && follows_joined
+                                 ? std::max(options_.run_start_tolerance, options_.consistency_tolerance)
+                                 : options_.run_start_tolerance;
+    if (std::fabs(static_cast<double>(p->id) - expected) <= tolerance)
     {
       joined.push_back(back);
       skipped = 0;
