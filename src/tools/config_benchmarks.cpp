@@ -7,7 +7,11 @@
 //                                     as LoopDetector makes it: the scan of the history every frame pays
 //   BM_ConfigPaceMatch/<config>/<N>   the same frame with sequences at any pace (PaceMatcher, the config's max_pace,
 //                                     pace_penalty and pace_tolerance; max_pace 3 when the config says 1), the
-//                                     matcher the shipped configurations run (with their slip_penalty)
+//                                     matcher the shipped configurations run (with their slip_penalty and
+//                                     pace_prior), while no loop is published: a robot on new ground
+//   BM_ConfigPaceMatchPublished/<config>/<N>
+//                                     BM_ConfigPaceMatch while a run is published: no pace prior to add (configs
+//                                     whose pace_prior is not 0)
 //   BM_ConfigPaceMatchNoSlip/<config>/<N>
 //                                     BM_ConfigPaceMatch with slip_penalty 0: what following a path one place off
 //                                     its line costs a frame (configs whose slip_penalty is not 0)
@@ -180,7 +184,7 @@ void configMatch(benchmark::State& state, const std::string& name, size_t n, int
   setBytes(state, db);
 }
 
-void configPaceMatch(benchmark::State& state, const std::string& name, size_t n, bool slip)
+void configPaceMatch(benchmark::State& state, const std::string& name, size_t n, bool slip, bool searching)
 {
   const openable::Config config = shipped(name);
   const openable::PlaceDatabase& db = database(name, n);
@@ -189,7 +193,9 @@ void configPaceMatch(benchmark::State& state, const std::string& name, size_t n,
   pace.penalty = static_cast<float>(config.pace_penalty);
   pace.tolerance = config.pace_tolerance;
   pace.slip = slip ? static_cast<float>(config.slip_penalty) : 0.0f;
+  pace.prior = static_cast<float>(config.pace_prior);
   openable::PaceMatcher matcher(db.layout(), config.sequence_length, config.bidirectional, pace);
+  matcher.setSearching(searching);
   std::mt19937_64 rng(99);
   std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));
   for (auto& q : queries)
@@ -242,10 +248,16 @@ void registerConfigBenchmarks()
       const std::string suffix = name + "/" + std::to_string(n);
       benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n, 0)
           ->Unit(benchmark::kMillisecond);
-      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n, true)
+      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n, true,
+                                   true)
           ->Unit(benchmark::kMillisecond);
+      if (shipped(name).pace_prior > 0.0)  // else BM_ConfigPaceMatch is this frame already
+        benchmark::RegisterBenchmark(("BM_ConfigPaceMatchPublished/" + suffix).c_str(), configPaceMatch, name, n,
+                                     true, false)
+            ->Unit(benchmark::kMillisecond);
       if (shipped(name).slip_penalty > 0.0)  // else BM_ConfigPaceMatch is this frame already
-        benchmark::RegisterBenchmark(("BM_ConfigPaceMatchNoSlip/" + suffix).c_str(), configPaceMatch, name, n, false)
+        benchmark::RegisterBenchmark(("BM_ConfigPaceMatchNoSlip/" + suffix).c_str(), configPaceMatch, name, n, false,
+                                     true)
             ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
           ->Unit(benchmark::kMillisecond);
