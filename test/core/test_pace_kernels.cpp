@@ -264,3 +264,45 @@ TEST(PaceKernels, PacesBeyondTheAvx512ReachRunAnotherKernelWithTheSameResults)
     EXPECT_NO_THROW(PaceMatcher(layout, 7, false, wide));
   }
 }
+
+// While searching, each kernel keeps every place's smallest cost plus its pace's prior as it writes the costs, and
+// each chunk's minimum with the prior comes from it; the place smallestDistinct() finds must be the smallest of
+// the plain scan (normalized(), which adds the prior pace by pace in 32-bit integers), across chunks and tails.
+TEST(PaceKernels, EveryKernelsChunkMinimaCarryThePriorExactly)
+{
+  const DescriptorLayout layout = binaryLayout(128);
+  for (PaceKernel kernel : supportedPaceKernels())
+    for (bool bidirectional : {false, true})
+      for (int tolerance : {0, 1})
+        for (float slip : {0.0f, 0.35f})
+        {
+          const std::string what = paceKernelName(kernel) + (bidirectional ? " bidirectional" : " forward") +
+                                   " tolerance " + std::to_string(tolerance) + " slip " + std::to_string(slip);
+          PaceOptions options;
+          options.kernel = kernel;
+          options.tolerance = tolerance;
+          options.slip = slip;
+          options.prior = 0.24f;
+          PaceMatcher matcher(layout, 7, bidirectional, options);
+          std::mt19937_64 rng(29 + tolerance);
+          PlaceDatabase reference(layout);
+          std::vector<size_t> taken;
+          for (int t = 0; t < 50; ++t)
+          {
+            for (int k = 0; k < 101; ++k)  // 5,050 places at the end: two whole chunks and a tail of any length
+              reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+            matcher.setSearching(t % 5 != 2);
+            const auto query = queryAt(rng, reference, t);
+            const size_t candidates = reference.size() - 5;
+            matcher.match(query.data(), reference, candidates);
+            float lowest = 2.0f;
+            for (size_t j = 0; j < candidates; ++j)
+              lowest = std::min(lowest, matcher.normalized(j));
+            if (std::isnan(lowest) || t == 0)
+              continue;
+            matcher.smallestDistinct(1, 10, 1, taken);
+            ASSERT_EQ(taken.size(), 1u) << what << ", frame " << t;
+            ASSERT_EQ(matcher.normalized(taken[0]), lowest) << what << ", frame " << t;
+          }
+        }
+}

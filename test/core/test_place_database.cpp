@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -9,6 +11,7 @@
 
 #include "openable/error.h"
 #include "openable/map/place_database.h"
+#include "openable/map/streamed_block.h"
 #include "test_util.h"
 
 using namespace openable;
@@ -396,4 +399,25 @@ TEST(PlaceDatabase, VersionOneMapsLoadAndNonConsecutiveIdsAreRefused)
   {
     EXPECT_NE(std::string(e.what()).find("not consecutive"), std::string::npos) << e.what();
   }
+}
+
+// The blocks every frame streams through: whole cache lines, and from 32 MiB on whole 2 MiB pages (the size a
+// map's bytes() reports).
+TEST(StreamedBlock, SmallBlocksAreCacheLineAlignedAndLargeOnesHugePageAligned)
+{
+  const size_t huge = size_t(2) << 20;
+  for (size_t bytes :
+       {size_t(1), size_t(100), size_t(4096), (size_t(32) << 20) - 64, size_t(32) << 20, (size_t(32) << 20) + 1})
+  {
+    void* block = openable::allocateStreamedBlock(bytes);
+    ASSERT_NE(block, nullptr) << bytes;
+    const size_t alignment = bytes < (size_t(32) << 20) ? 64 : huge;
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(block) % alignment, 0u) << bytes;
+    EXPECT_EQ(openable::streamedBlockBytes(bytes) % alignment, 0u) << bytes;
+    EXPECT_GE(openable::streamedBlockBytes(bytes), bytes);
+    EXPECT_LT(openable::streamedBlockBytes(bytes), bytes + alignment);
+    static_cast<char*>(block)[bytes - 1] = 1;  // the whole block is there
+    std::free(block);
+  }
+  EXPECT_EQ(openable::streamedBlockBytes((size_t(32) << 20) + 1), size_t(34) << 20);
 }

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "openable/map/streamed_block.h"
 #include "openable/matching/frame_metric.h"
 #include "openable/matching/row_matcher.h"
 
@@ -62,7 +63,8 @@ std::string paceKernelName(PaceKernel kernel);
 /// Kernels this CPU runs, slowest first (kBest not among them).
 std::vector<PaceKernel> supportedPaceKernels();
 
-/// Storage on 64-byte boundaries: the kernels' vectors then load and store whole cache lines.
+/// Storage for costs every frame streams through (allocateStreamedBlock): the kernels' vectors load and store
+/// whole cache lines, and a large row sits on huge pages.
 template <typename T>
 struct CacheAligned
 {
@@ -74,11 +76,14 @@ struct CacheAligned
   }
   T* allocate(size_t n)
   {
-    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(64)));
+    void* block = allocateStreamedBlock(n * sizeof(T));
+    if (!block)
+      throw std::bad_alloc();
+    return static_cast<T*>(block);
   }
   void deallocate(T* p, size_t)
   {
-    ::operator delete(p, std::align_val_t(64));
+    std::free(p);
   }
   bool operator==(const CacheAligned&) const
   {
@@ -178,7 +183,7 @@ private:
   /// fixed point (M differs from min_v C by the own-distance term of pace_tolerance).
   int32_t costWithPrior(size_t column) const;
   /// The smallest costWithPrior() of a chunk's m places, from the costs just written (rows[v].to).
-  int32_t chunkMinimumWithPrior(size_t chunk, size_t m, const std::vector<int16_t*>& written);
+  int32_t chunkMinimumWithPrior(size_t chunk, size_t m) const;
   /// The cost of this frame's pace v: C[j, v] from the buffer that holds it.
   int16_t costAt(size_t column, size_t pace) const;
   /// The index in slopes_ of the pace of the column's best path (the first of the smallest costs).
@@ -193,12 +198,13 @@ private:
   int tolerance_;
   float prior_fraction_;  ///< PaceOptions::prior
   bool searching_ = true;
-  bool prior_active_ = false;  ///< the last frame's costs carry the prior (searching, prior_fraction_ > 0)
-  std::vector<int32_t> pace_prior_;  ///< per pace, in the fixed point, for the last frame
-  std::vector<int32_t> lowest_, with_prior_;  ///< scratch of chunkMinimumWithPrior()
+  bool prior_active_ = false;         ///< the last frame's costs carry the prior (searching, prior_fraction_ > 0)
+  std::vector<uint16_t> pace_prior_;  ///< per pace, in the fixed point, for the last frame
+  /// Per place of a chunk: its smallest cost plus prior (the kernel's scratch).
+  std::vector<uint16_t, CacheAligned<uint16_t>> with_prior_;
   pace_kernels::ChunkSums (*kernel_)(const pace_kernels::Chunk&);  ///< chosen once: the CPU and max_pace decide
-  std::vector<std::pair<int, int>> slopes_;  ///< paces as fractions p / q (negative: reverse)
-  float keep_ = 0.0f;                        ///< a = 1 - 1/L, the weight of the path so far
+  std::vector<std::pair<int, int>> slopes_;                        ///< paces as fractions p / q (negative: reverse)
+  float keep_ = 0.0f;                                              ///< a = 1 - 1/L, the weight of the path so far
   uint64_t queries_ = 0;
   uint64_t evidence_ = 0;  ///< query frames that had places to match since the last reset
   uint64_t first_id_ = 0;

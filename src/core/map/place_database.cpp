@@ -4,45 +4,19 @@
 #include <cstdlib>
 #include <cstring>
 
-#ifdef __linux__
-#include <sys/mman.h>
-#endif
-
 #include "map/map_file.h"
 #include "openable/error.h"
+#include "openable/map/streamed_block.h"
 
 namespace openable
 {
 namespace
 {
-constexpr size_t kAlignment = 64;
-constexpr size_t kHugePage = size_t(2) << 20;
-/// From here on the descriptors go on 2 MiB pages where the kernel has them (transparent huge pages):
-/// every frame streams the whole history, and on 4 KiB pages a 480 MB map is 120,000 TLB misses a pass. The
-/// block is rounded up to whole huge pages, so the threshold keeps that rounding below 6 %.
-constexpr size_t kHugePagesFrom = size_t(32) << 20;
-
-/// The alignment of a block holding `bytes` of descriptors, and the block's size (a multiple of it).
-size_t blockAlignment(size_t bytes)
-{
-  return bytes < kHugePagesFrom ? kAlignment : kHugePage;
-}
-size_t blockBytes(size_t bytes)
-{
-  const size_t alignment = blockAlignment(bytes);
-  return (bytes + alignment - 1) / alignment * alignment;
-}
-
-/// A block for `bytes` of descriptors, 64-byte aligned (a descriptor row starts a cache line when the stride
-/// is a multiple of 8 words); null when out of memory. Freed with std::free.
+/// A block for `bytes` of descriptors (a descriptor row starts a cache line when the stride is a multiple of 8
+/// words); null when out of memory. Freed with std::free.
 uint64_t* allocateDescriptors(size_t bytes)
 {
-  void* block = std::aligned_alloc(blockAlignment(bytes), blockBytes(bytes));
-#ifdef MADV_HUGEPAGE
-  if (block && blockAlignment(bytes) == kHugePage)
-    madvise(block, blockBytes(bytes), MADV_HUGEPAGE);  // advice only: without huge pages it works the same
-#endif
-  return static_cast<uint64_t*>(block);
+  return static_cast<uint64_t*>(allocateStreamedBlock(bytes));
 }
 }  // namespace
 
@@ -194,7 +168,7 @@ void PlaceDatabase::evictOldest(size_t count)
 
 size_t PlaceDatabase::bytes() const
 {
-  return (allocated_ ? blockBytes(sizeof(uint64_t) * stride_ * allocated_) : 0) +
+  return (allocated_ ? streamedBlockBytes(sizeof(uint64_t) * stride_ * allocated_) : 0) +
          sizeof(FrameRecord) * records_.capacity() + sizeof(std::array<double, 7>) * poses_.capacity() +
          sources_.bytes();
 }

@@ -62,6 +62,12 @@ struct Chunk
   int16_t* smallest;     ///< the smallest cost of each place
   int16_t* with_change;  ///< M' + change for each offset, `stride` entries each
   size_t stride;
+  /// While the matcher searches (PaceMatcher's pace prior; null otherwise): each pace's prior, and scratch for the
+  /// smallest cost plus its pace's prior of each place. Unsigned: a cost and a prior are each at most kOne, so the
+  /// sum is exact, and the kernel keeps it as it writes the costs (a pass over the 17 rows after the kernel, still
+  /// in L2, took as long as the kernel).
+  const uint16_t* prior = nullptr;
+  uint16_t* with_prior = nullptr;
 };
 
 /// Sums over the chunk's own distances (the row's mean and spread give the next frame its prior and its change
@@ -140,11 +146,13 @@ inline int16_t offLine(const PaceRow& row, long from)
 /// Every pace's cost and M of place i of the chunk:
 ///   C[j, v] = entry + a * min(C'[j + offset_v, v], M'[j + offset_v] + change, C'[j + offset_v -+ 1, v] + slip),
 ///   M[j] = min_v C[j, v] + extra
-/// (primes: the previous frame; the slip term as offLine, when the chunk slips). The vector kernels' tails.
+/// (primes: the previous frame; the slip term as offLine, when the chunk slips), and the place's smallest cost and,
+/// with a prior, its smallest cost plus prior. The vector kernels' tails.
 inline void update(const Chunk& c, size_t i, ChunkSums& sums)
 {
   const size_t j = c.begin + i;
   int16_t best = static_cast<int16_t>(kOne);
+  uint16_t with_prior = UINT16_MAX;
   for (size_t v = 0; v < c.paces; ++v)
   {
     const PaceRow& row = c.rows[v];
@@ -155,7 +163,12 @@ inline void update(const Chunk& c, size_t i, ChunkSums& sums)
     const int16_t cost = addSaturated(c.entry[i], scaled(path, c.keep));
     row.to[i] = cost;
     best = std::min(best, cost);
+    if (c.prior)
+      with_prior = std::min(with_prior, static_cast<uint16_t>(static_cast<uint16_t>(cost) + c.prior[v]));
   }
+  c.smallest[i] = best;
+  if (c.prior)
+    c.with_prior[i] = with_prior;
   c.best[j] = addSaturated(best, c.extra[i]);
   sums.minimum = std::min(sums.minimum, c.best[j]);
 }

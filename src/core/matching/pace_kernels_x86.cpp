@@ -44,12 +44,13 @@ __attribute__((target("avx512f,avx512bw"))) inline __m256i entries512(__m512i r,
 }
 
 /// One pace's costs for the 32 places from i (fewer under a mask) from the previous costs of the places it comes
-/// from (`old`), of the places one off its line (`off`, used when kSlip), and the smallest cost of each place so far.
+/// from (`old`), of the places one off its line (`off`, used when kSlip), the smallest cost of each place so far and,
+/// when `with_prior` is not null, the smallest cost plus its pace's prior.
 template <bool kMasked, bool kSlip>
 __attribute__((target("avx512f,avx512bw"))) inline void pace512(__m512i old, __m512i off, int16_t* to,
                                                                 const int16_t* with_change, const int16_t* entry,
                                                                 int16_t* best, size_t i, __mmask32 mask, __m512i keep,
-                                                                __m512i slip)
+                                                                __m512i slip, uint16_t* with_prior, __m512i prior)
 {
   __m512i path = _mm512_min_epi16(old, load512<kMasked>(mask, with_change + i));
   if (kSlip)
@@ -57,6 +58,11 @@ __attribute__((target("avx512f,avx512bw"))) inline void pace512(__m512i old, __m
   const __m512i cost = _mm512_adds_epi16(load512<kMasked>(mask, entry + i), _mm512_mulhrs_epi16(path, keep));
   store512<kMasked>(mask, to + i, cost);
   store512<kMasked>(mask, best + i, _mm512_min_epi16(load512<kMasked>(mask, best + i), cost));
+  if (with_prior)
+  {
+    int16_t* lanes = reinterpret_cast<int16_t*>(with_prior) + i;
+    store512<kMasked>(mask, lanes, _mm512_min_epu16(load512<kMasked>(mask, lanes), _mm512_adds_epu16(cost, prior)));
+  }
 }
 
 /// The index vector that picks (before, now)[32 + k - behind] for lane k: indices 0..31 pick `before`, 32..63 `now`.
@@ -97,7 +103,8 @@ __attribute__((target("avx512f,avx512bw"))) inline __m512i offLineReverse512(con
 template <bool kSlip>
 __attribute__((target("avx512f,avx512bw"))) inline void forward512(int16_t* row, long step, const int16_t* with_change,
                                                                    const int16_t* entry, int16_t* best, size_t whole,
-                                                                   __mmask32 top, __m512i keep, __m512i slip)
+                                                                   __mmask32 top, __m512i keep, __m512i slip,
+                                                                   uint16_t* with_prior, __m512i prior)
 {
   const __m512i index = behindIndex(step), further = behindIndex(step + 1),
                 fewer = behindIndex(step > 0 ? step - 1 : 0);
@@ -110,7 +117,7 @@ __attribute__((target("avx512f,avx512bw"))) inline void forward512(int16_t* row,
     const __m512i now = _mm512_loadu_si512(row + i);
     pace512<false, kSlip>(_mm512_permutex2var_epi16(before, index, now),
                           offLine512<kSlip>(before, now, further, fewer, step > 0), row, with_change, entry, best, i,
-                          ~__mmask32(0), keep, slip);
+                          ~__mmask32(0), keep, slip, with_prior, prior);
     before = now;
   }
   if (top)
@@ -118,7 +125,7 @@ __attribute__((target("avx512f,avx512bw"))) inline void forward512(int16_t* row,
     const __m512i now = _mm512_maskz_loadu_epi16(top, row + whole);
     pace512<true, kSlip>(_mm512_permutex2var_epi16(before, index, now),
                          offLine512<kSlip>(before, now, further, fewer, step > 0), row, with_change, entry, best, whole,
-                         top, keep, slip);
+                         top, keep, slip, with_prior, prior);
   }
 }
 
@@ -127,17 +134,18 @@ __attribute__((target("avx512f,avx512bw"))) inline void forward512(int16_t* row,
 template <bool kSlip>
 __attribute__((target("avx512f,avx512bw"))) inline void reverse512(const PaceRow& row, const int16_t* with_change,
                                                                    const int16_t* entry, int16_t* best, size_t whole,
-                                                                   __mmask32 top, __m512i keep, __m512i slip)
+                                                                   __mmask32 top, __m512i keep, __m512i slip,
+                                                                   uint16_t* with_prior, __m512i prior)
 {
   const int16_t* from = row.from + row.offset;
   for (size_t i = 0; i < whole; i += 32)
     pace512<false, kSlip>(_mm512_loadu_si512(from + i),
                           offLineReverse512<kSlip>(from, ~__mmask32(0), i, row.offset != 0), row.to, with_change, entry,
-                          best, i, ~__mmask32(0), keep, slip);
+                          best, i, ~__mmask32(0), keep, slip, with_prior, prior);
   if (top)
     pace512<true, kSlip>(_mm512_maskz_loadu_epi16(top, from + whole),
                          offLineReverse512<kSlip>(from, top, whole, row.offset != 0), row.to, with_change, entry, best,
-                         whole, top, keep, slip);
+                         whole, top, keep, slip, with_prior, prior);
 }
 
 /// Every pace of the chunk, forward in place or reverse from the other buffer (kSlip: with the slip term).
@@ -149,11 +157,12 @@ __attribute__((target("avx512f,avx512bw"))) inline void paces512(const Chunk& c,
   {
     const PaceRow& row = c.rows[v];
     const __m512i slip = _mm512_set1_epi16(kSlip ? row.slip : 0);
+    const __m512i prior = _mm512_set1_epi16(static_cast<int16_t>(c.prior ? c.prior[v] : 0));
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
     if (row.from == row.to)
-      forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip);
+      forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip, c.with_prior, prior);
     else
-      reverse512<kSlip>(row, with_change, c.entry, best, whole, top, keep, slip);
+      reverse512<kSlip>(row, with_change, c.entry, best, whole, top, keep, slip, c.with_prior, prior);
   }
 }
 
@@ -172,11 +181,12 @@ __attribute__((target("avx2"))) inline __m256i load256(const int16_t* p)
 }
 
 /// One pace's costs for the 16 places from i; with kSlip, also from the places one off its line: `further` (-1
-/// forward, +1 reverse) and, when `fewer`, the other side.
+/// forward, +1 reverse) and, when `fewer`, the other side; with `with_prior`, the smallest cost plus prior as pace512.
 template <bool kSlip>
 __attribute__((target("avx2"))) inline void pace256(const int16_t* from, int16_t* to, const int16_t* with_change,
                                                     const int16_t* entry, int16_t* best, size_t i, __m256i keep,
-                                                    long further, bool fewer, __m256i slip)
+                                                    long further, bool fewer, __m256i slip, uint16_t* with_prior,
+                                                    __m256i prior)
 {
   __m256i path = _mm256_min_epi16(load256(from + i), load256(with_change + i));
   if (kSlip)
@@ -189,6 +199,11 @@ __attribute__((target("avx2"))) inline void pace256(const int16_t* from, int16_t
   const __m256i cost = _mm256_adds_epi16(load256(entry + i), _mm256_mulhrs_epi16(path, keep));
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(to + i), cost);
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + i), _mm256_min_epi16(load256(best + i), cost));
+  if (with_prior)
+  {
+    auto* lanes = reinterpret_cast<__m256i*>(with_prior + i);
+    _mm256_storeu_si256(lanes, _mm256_min_epu16(_mm256_loadu_si256(lanes), _mm256_adds_epu16(cost, prior)));
+  }
 }
 
 /// Every pace over the chunk's whole blocks of 16, from the top block down (kSlip: with the slip term). Forward rows
@@ -200,6 +215,7 @@ __attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* be
   {
     const PaceRow& row = c.rows[v];
     const __m256i slip = _mm256_set1_epi16(kSlip ? row.slip : 0);
+    const __m256i prior = _mm256_set1_epi16(static_cast<int16_t>(c.prior ? c.prior[v] : 0));
     const int16_t* from = row.from + row.offset;
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
     const long further = row.from == row.to ? -1 : 1;
@@ -207,7 +223,7 @@ __attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* be
     for (size_t k = whole; k > 0;)
     {
       k -= 16;
-      pace256<kSlip>(from, row.to, with_change, c.entry, best, k, keep, further, fewer, slip);
+      pace256<kSlip>(from, row.to, with_change, c.entry, best, k, keep, further, fewer, slip, c.with_prior, prior);
     }
   }
 }
@@ -258,6 +274,9 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
   int16_t* best = c.smallest;
   for (size_t i = 0; i < m; i += 32)
     _mm512_storeu_si512(best + i, highest);
+  if (c.prior)
+    for (size_t i = 0; i < m; i += 32)
+      _mm512_storeu_si512(c.with_prior + i, _mm512_set1_epi16(-1));
   if (c.slips)
     paces512<true>(c, best, whole, top, keep);
   else
@@ -326,6 +345,8 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
   int16_t* best = c.smallest;
   for (size_t k = 0; k < whole; k += 16)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + k), highest);
+  if (c.prior)
+    std::fill_n(c.with_prior, whole, UINT16_MAX);
   if (c.slips)
     paces256<true>(c, best, whole, keep);
   else

@@ -93,7 +93,6 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
   entry_.resize(kChunk);
   extra_.resize(kChunk);
   smallest_.resize(kChunk);
-  lowest_.resize(kChunk);
   with_prior_.resize(kChunk);
 }
 
@@ -280,7 +279,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     for (size_t v = 0; v < slopes_.size(); ++v)
     {
       const double away = std::min(1.0, std::fabs(std::log(placesPerFrame(slopes_[v]))) / std::log(kPriorPace));
-      pace_prior_[v] = static_cast<int32_t>(std::lround(double(prior_fraction_) * double(chunk.change) * away));
+      pace_prior_[v] = static_cast<uint16_t>(std::lround(double(prior_fraction_) * double(chunk.change) * away));
     }
   }
   // A slip costs a fraction of a change of pace (slip_penalty 0: paths never leave their line; the kernels skip the term).
@@ -315,13 +314,14 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.with_change = with_change_.data();
   chunk.stride = kChunk;
   chunk.smallest = smallest_.data();
+  chunk.prior = prior_active_ ? pace_prior_.data() : nullptr;
+  chunk.with_prior = with_prior_.data();
   // M_{t-1} is read while M_t is written: both keep pad_ typical places on each side.
   std::swap(best_, old_best_);
   best_.resize(old_best_.size());
   chunk.old_best = old_best_.data() + pad_;
   chunk.best = best_.data() + pad_;
   uint64_t distance_sum = 0, square_sum = 0;
-  std::vector<int16_t*> written(paces);
   // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
   for (size_t k = 0; k < chunks; ++k)
   {
@@ -354,11 +354,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     square_sum += sums.squares;
     chunk_minimum_[k] = costOf(sums.minimum);
     if (prior_active_)
-    {
-      for (size_t v = 0; v < paces; ++v)
-        written[v] = rows[v].to;
-      chunk_minimum_[k] = static_cast<float>(chunkMinimumWithPrior(k, chunk.m, written)) / pace_kernels::kOne;
-    }
+      chunk_minimum_[k] = static_cast<float>(chunkMinimumWithPrior(k, chunk.m)) / pace_kernels::kOne;
   }
   flipped_ = bidirectional_ && !flipped_;
   const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
@@ -384,26 +380,14 @@ int32_t PaceMatcher::costWithPrior(size_t column) const
   return int32_t(best_[pad_ + column]) - lowest + with_prior;
 }
 
-int32_t PaceMatcher::chunkMinimumWithPrior(size_t chunk, size_t m, const std::vector<int16_t*>& written)
+int32_t PaceMatcher::chunkMinimumWithPrior(size_t chunk, size_t m) const
 {
-  // costWithPrior() for the chunk's places pace by pace (each pace's costs one run of memory, still in L2), so
-  // the loops vectorise; the same integers as costWithPrior(), which smallestDistinct() compares with.
-  std::fill(lowest_.begin(), lowest_.begin() + long(m), std::numeric_limits<int32_t>::max());
-  std::fill(with_prior_.begin(), with_prior_.begin() + long(m), std::numeric_limits<int32_t>::max());
-  for (size_t v = 0; v < written.size(); ++v)
-  {
-    const int16_t* costs = written[v];
-    const int32_t prior = pace_prior_[v];
-    for (size_t i = 0; i < m; ++i)
-    {
-      lowest_[i] = std::min(lowest_[i], int32_t(costs[i]));
-      with_prior_[i] = std::min(with_prior_[i], int32_t(costs[i]) + prior);
-    }
-  }
+  // costWithPrior() of the chunk's places from what the kernel kept: each place's smallest cost and its smallest
+  // cost plus prior (the same integers, which smallestDistinct() compares with).
   const int16_t* best = best_.data() + pad_ + chunk * kChunk;
   int32_t minimum = std::numeric_limits<int32_t>::max();
   for (size_t i = 0; i < m; ++i)
-    minimum = std::min(minimum, int32_t(best[i]) - lowest_[i] + with_prior_[i]);
+    minimum = std::min(minimum, int32_t(best[i]) - int32_t(smallest_[i]) + int32_t(with_prior_[i]));
   return minimum;
 }
 
