@@ -182,7 +182,7 @@ private:
   /// A place's cost with the pace prior (prior_active_): M - min_v C[j, v] + min_v (C[j, v] + prior[v]), in the
   /// fixed point (M differs from min_v C by the own-distance term of pace_tolerance).
   int32_t costWithPrior(size_t column) const;
-  /// The smallest costWithPrior() of a chunk's m places, from the costs just written (rows[v].to).
+  /// The smallest costWithPrior() of a chunk's m places, from what the kernel kept (smallest_, with_prior_).
   int32_t chunkMinimumWithPrior(size_t chunk, size_t m) const;
   /// The cost of this frame's pace v: C[j, v] from the buffer that holds it.
   int16_t costAt(size_t column, size_t pace) const;

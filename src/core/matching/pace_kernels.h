@@ -62,7 +62,7 @@ struct Chunk
   int16_t* smallest;     ///< the smallest cost of each place
   int16_t* with_change;  ///< M' + change for each offset, `stride` entries each
   size_t stride;
-  /// While the matcher searches (PaceMatcher's pace prior; null otherwise): each pace's prior, and scratch for the
+  /// While the matcher searches (PaceMatcher's pace prior; both null otherwise): each pace's prior, and scratch for the
   /// smallest cost plus its pace's prior of each place. Unsigned: a cost and a prior are each at most kOne, so the
   /// sum is exact, and the kernel keeps it as it writes the costs (a pass over the 17 rows after the kernel, still
   /// in L2, took as long as the kernel).

@@ -315,7 +315,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.stride = kChunk;
   chunk.smallest = smallest_.data();
   chunk.prior = prior_active_ ? pace_prior_.data() : nullptr;
-  chunk.with_prior = with_prior_.data();
+  chunk.with_prior = prior_active_ ? with_prior_.data() : nullptr;
   // M_{t-1} is read while M_t is written: both keep pad_ typical places on each side.
   std::swap(best_, old_best_);
   best_.resize(old_best_.size());
