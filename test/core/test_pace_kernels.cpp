@@ -81,8 +81,8 @@ public:
     const auto slipFixed = [&](int p, int q)
     {
       const double pace = std::max(1.0, double(std::abs(p)) / q);
-      return slip_ > 0.0f ? static_cast<int32_t>(
-                                std::min<double>(kOne, std::round(double(slip_) * double(change) * kOne / std::sqrt(pace))))
+      return slip_ > 0.0f ? static_cast<int32_t>(std::min<double>(
+                                kOne, std::round(double(slip_) * double(change) * kOne / std::sqrt(pace))))
                           : -1;
     };
     const auto entry = [scale](uint32_t r)
@@ -116,6 +116,19 @@ public:
       }
       best[j] = saturated(smallest + entry(raw[j]) - entry(nearest[j]));
     }
+    // While searching: the smallest cost plus its pace's prior, and M's own-distance term, saturated at 65535.
+    searched_.assign(n, 0);
+    for (size_t j = 0; j < n && prior_fraction_ > 0.0f && a > 0; ++j)
+    {
+      int32_t priced = INT32_MAX;
+      for (size_t v = 0; v < paces_.size(); ++v)
+      {
+        const double pace = double(std::abs(paces_[v].first)) / paces_[v].second;
+        const double away = std::min(1.0, std::fabs(std::log(pace)) / std::log(1.3));
+        priced = std::min<int32_t>(priced, costs[j][v] + std::lround(double(prior_fraction_) * change_fixed * away));
+      }
+      searched_[j] = std::min<int32_t>(65535, priced + entry(raw[j]) - entry(nearest[j]));
+    }
     costs_ = costs;
     best_ = best;
     uint64_t sum = 0, squares = 0;
@@ -134,6 +147,16 @@ public:
   {
     return static_cast<float>(best_[j]) / static_cast<float>(kOne);
   }
+  /// best() with the pace prior, for a frame matched after search() with a prior.
+  float searched(size_t j) const
+  {
+    return static_cast<float>(searched_[j]) / static_cast<float>(kOne);
+  }
+  /// The next frames search with this fraction of a change of pace as the prior (0: they do not search).
+  void search(float prior_fraction)
+  {
+    prior_fraction_ = prior_fraction;
+  }
   /// The first pace with the smallest cost of place j.
   size_t pace(size_t j) const
   {
@@ -149,6 +172,8 @@ private:
   float slip_;
   std::vector<std::vector<int16_t>> costs_;
   std::vector<int16_t> best_;
+  std::vector<uint16_t> searched_;
+  float prior_fraction_ = 0.0f;
   int16_t prior_ = 0;
   float spread_ = 0.0f;
   uint64_t t_ = 0;
@@ -265,9 +290,9 @@ TEST(PaceKernels, PacesBeyondTheAvx512ReachRunAnotherKernelWithTheSameResults)
   }
 }
 
-// While searching, each kernel keeps every place's smallest cost plus its pace's prior as it writes the costs, and
-// each chunk's minimum with the prior comes from it; the place smallestDistinct() finds must be the smallest of
-// the plain scan (normalized(), which adds the prior pace by pace in 32-bit integers), across chunks and tails.
+// While searching, each kernel keeps every place's cost with its pace's prior as it writes the costs (equal to the
+// plain recurrence's, to the bit), and each chunk's minimum with the prior comes from it; the place
+// smallestDistinct() finds must be the smallest of the plain scan, across chunks and tails.
 TEST(PaceKernels, EveryKernelsChunkMinimaCarryThePriorExactly)
 {
   const DescriptorLayout layout = binaryLayout(128);
@@ -284,6 +309,7 @@ TEST(PaceKernels, EveryKernelsChunkMinimaCarryThePriorExactly)
           options.slip = slip;
           options.prior = 0.24f;
           PaceMatcher matcher(layout, 7, bidirectional, options);
+          NaiveFixedPace naive(layout, 7, matcher.paces(), options.penalty, tolerance, slip);
           std::mt19937_64 rng(29 + tolerance);
           PlaceDatabase reference(layout);
           std::vector<size_t> taken;
@@ -292,12 +318,18 @@ TEST(PaceKernels, EveryKernelsChunkMinimaCarryThePriorExactly)
             for (int k = 0; k < 101; ++k)  // 5,050 places at the end: two whole chunks and a tail of any length
               reference.add(openable_test::randomWords(rng, 2), FrameInfo());
             matcher.setSearching(t % 5 != 2);
+            naive.search(t % 5 != 2 ? options.prior : 0.0f);
             const auto query = queryAt(rng, reference, t);
             const size_t candidates = reference.size() - 5;
             matcher.match(query.data(), reference, candidates);
+            naive.match(query.data(), reference, candidates);
             float lowest = 2.0f;
             for (size_t j = 0; j < candidates; ++j)
+            {
+              const float expected = t % 5 != 2 && t > 0 ? std::min(naive.searched(j), 1.0f) : naive.best(j);
+              ASSERT_EQ(matcher.normalized(j), expected) << what << ", frame " << t << ", column " << j;
               lowest = std::min(lowest, matcher.normalized(j));
+            }
             if (std::isnan(lowest) || t == 0)
               continue;
             matcher.smallestDistinct(1, 10, 1, taken);

@@ -179,11 +179,6 @@ private:
   /// The smallest normalized() of chunk `chunk`, leaving out columns within `window` of a taken one.
   float chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const;
   float value(size_t column, int* direction) const;
-  /// A place's cost with the pace prior (prior_active_): M - min_v C[j, v] + min_v (C[j, v] + prior[v]), in the
-  /// fixed point (M differs from min_v C by the own-distance term of pace_tolerance).
-  int32_t costWithPrior(size_t column) const;
-  /// The smallest costWithPrior() of a chunk's m places, from what the kernel kept (smallest_, with_prior_).
-  int32_t chunkMinimumWithPrior(size_t chunk, size_t m) const;
   /// The cost of this frame's pace v: C[j, v] from the buffer that holds it.
   int16_t costAt(size_t column, size_t pace) const;
   /// The index in slopes_ of the pace of the column's best path (the first of the smallest costs).
@@ -202,6 +197,9 @@ private:
   std::vector<uint16_t> pace_prior_;  ///< per pace, in the fixed point, for the last frame
   /// Per place of a chunk: its smallest cost plus prior (the kernel's scratch).
   std::vector<uint16_t, CacheAligned<uint16_t>> with_prior_;
+  /// Per place, while the prior is active: M - min_v C[j, v] + min_v (C[j, v] + prior[v]) in the fixed point (M
+  /// differs from min_v C by the own-distance term of pace_tolerance), as the kernel wrote it.
+  std::vector<uint16_t> searched_;
   pace_kernels::ChunkSums (*kernel_)(const pace_kernels::Chunk&);  ///< chosen once: the CPU and max_pace decide
   std::vector<std::pair<int, int>> slopes_;                        ///< paces as fractions p / q (negative: reverse)
   float keep_ = 0.0f;                                              ///< a = 1 - 1/L, the weight of the path so far

@@ -68,6 +68,11 @@ struct Chunk
   /// in L2, took as long as the kernel).
   const uint16_t* prior = nullptr;
   uint16_t* with_prior = nullptr;
+  /// While searching, each place's cost with the prior, indexed by place as `best`: its smallest cost plus prior
+  /// and the own-distance term of M (`extra`), unsigned and saturated at 2.0, so that smallestDistinct() reads one
+  /// value a place (adding the prior pace by pace there, over every place of the chunks it scanned again, made a
+  /// searching frame at 1e5 places six times a published one).
+  uint16_t* searched = nullptr;
 };
 
 /// Sums over the chunk's own distances (the row's mean and spread give the next frame its prior and its change
@@ -76,7 +81,8 @@ struct ChunkSums
 {
   uint64_t sum = 0;
   uint64_t squares = 0;
-  int16_t minimum = kOne;  ///< the smallest M of the chunk
+  int16_t minimum = kOne;                  ///< the smallest M of the chunk
+  uint16_t searched_minimum = UINT16_MAX;  ///< the smallest Chunk::searched of the chunk (while searching)
 };
 
 /// Updates every pace's costs and M for the chunk's places. Forward rows are updated in place: the portable and
@@ -109,6 +115,13 @@ inline int16_t addSaturated(int32_t a, int32_t b)
 inline int16_t scaled(int32_t x, int32_t keep)
 {
   return static_cast<int16_t>((x * keep + 16384) >> 15);
+}
+
+/// A place's cost with the prior: its smallest cost plus prior, plus M's own-distance term (>= 0), saturated as
+/// vpaddusw.
+inline uint16_t searchedCost(uint16_t with_prior, int16_t extra)
+{
+  return static_cast<uint16_t>(std::min<int32_t>(UINT16_MAX, int32_t(with_prior) + extra));
 }
 
 /// The entry term of a distance: float(r) * scale, at most 1.0, rounded to the nearest (even) integer, as
@@ -167,10 +180,14 @@ inline void update(const Chunk& c, size_t i, ChunkSums& sums)
       with_prior = std::min(with_prior, static_cast<uint16_t>(static_cast<uint16_t>(cost) + c.prior[v]));
   }
   c.smallest[i] = best;
-  if (c.prior)
-    c.with_prior[i] = with_prior;
   c.best[j] = addSaturated(best, c.extra[i]);
   sums.minimum = std::min(sums.minimum, c.best[j]);
+  if (c.prior)
+  {
+    c.with_prior[i] = with_prior;
+    c.searched[j] = searchedCost(with_prior, c.extra[i]);
+    sums.searched_minimum = std::min(sums.searched_minimum, c.searched[j]);
+  }
 }
 
 }  // namespace pace_kernels

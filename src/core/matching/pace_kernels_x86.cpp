@@ -282,18 +282,34 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
   else
     paces512<false>(c, best, whole, top, keep);
   __m512i minimum = highest;
+  const __m512i unsigned_highest = _mm512_set1_epi16(-1);
+  __m512i searched_minimum = unsigned_highest;
   int16_t* out = c.best + c.begin;
   for (size_t i = 0; i < m; i += 32)
   {
     const __mmask32 mask = i < whole ? ~__mmask32(0) : top;
-    const __m512i value =
-        _mm512_adds_epi16(_mm512_maskz_loadu_epi16(mask, best + i), _mm512_maskz_loadu_epi16(mask, c.extra + i));
+    const __m512i extra = _mm512_maskz_loadu_epi16(mask, c.extra + i);
+    const __m512i value = _mm512_adds_epi16(_mm512_maskz_loadu_epi16(mask, best + i), extra);
     _mm512_mask_storeu_epi16(out + i, mask, value);
     minimum = _mm512_min_epi16(minimum, _mm512_mask_blend_epi16(mask, highest, value));
+    if (c.prior)
+    {
+      const __m512i searched =
+          _mm512_adds_epu16(_mm512_maskz_loadu_epi16(mask, reinterpret_cast<const int16_t*>(c.with_prior) + i), extra);
+      _mm512_mask_storeu_epi16(c.searched + c.begin + i, mask, searched);
+      searched_minimum = _mm512_min_epu16(searched_minimum, _mm512_mask_blend_epi16(mask, unsigned_highest, searched));
+    }
   }
   const __m512i low = _mm512_cvtepi16_epi32(_mm512_castsi512_si256(minimum));
   const __m512i high = _mm512_cvtepi16_epi32(_mm512_extracti64x4_epi64(minimum, 1));
   sums.minimum = static_cast<int16_t>(_mm512_reduce_min_epi32(_mm512_min_epi32(low, high)));
+  if (c.prior)
+  {
+    const __m512i low_searched = _mm512_cvtepu16_epi32(_mm512_castsi512_si256(searched_minimum));
+    const __m512i high_searched = _mm512_cvtepu16_epi32(_mm512_extracti64x4_epi64(searched_minimum, 1));
+    sums.searched_minimum =
+        static_cast<uint16_t>(_mm512_reduce_min_epu32(_mm512_min_epu32(low_searched, high_searched)));
+  }
   return sums;
 }
 
@@ -351,19 +367,30 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
     paces256<true>(c, best, whole, keep);
   else
     paces256<false>(c, best, whole, keep);
-  __m256i minimum = highest;
+  __m256i minimum = highest, searched_minimum = _mm256_set1_epi16(-1);
   int16_t* out = c.best + c.begin;
   for (size_t k = 0; k < whole; k += 16)
   {
-    const __m256i value = _mm256_adds_epi16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(best + k)),
-                                            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.extra + k)));
+    const __m256i extra = load256(c.extra + k);
+    const __m256i value = _mm256_adds_epi16(load256(best + k), extra);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + k), value);
     minimum = _mm256_min_epi16(minimum, value);
+    if (c.prior)
+    {
+      const __m256i searched =
+          _mm256_adds_epu16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.with_prior + k)), extra);
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(c.searched + c.begin + k), searched);
+      searched_minimum = _mm256_min_epu16(searched_minimum, searched);
+    }
   }
   alignas(32) int16_t values[16];
   _mm256_store_si256(reinterpret_cast<__m256i*>(values), minimum);
   for (int16_t x : values)
     sums.minimum = std::min(sums.minimum, x);
+  alignas(32) uint16_t searched[16];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(searched), searched_minimum);
+  for (uint16_t x : searched)
+    sums.searched_minimum = std::min(sums.searched_minimum, x);
   return sums;
 }
 

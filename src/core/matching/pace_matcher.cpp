@@ -58,6 +58,12 @@ float costOf(int16_t cost)
   return static_cast<float>(cost) / static_cast<float>(pace_kernels::kOne);
 }
 
+/// A cost with the pace prior (pace_kernels::searchedCost) as a normalised distance.
+float searchedCostOf(uint16_t cost)
+{
+  return static_cast<float>(cost) / static_cast<float>(pace_kernels::kOne);
+}
+
 /// Places a pace of p / q advances at frame t: the straight line's position floor(t p / q), differenced.
 int stepAt(uint64_t t, int p, int q)
 {
@@ -282,7 +288,8 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
       pace_prior_[v] = static_cast<uint16_t>(std::lround(double(prior_fraction_) * double(chunk.change) * away));
     }
   }
-  // A slip costs a fraction of a change of pace (slip_penalty 0: paths never leave their line; the kernels skip the term).
+  // A slip costs a fraction of a change of pace (slip_penalty 0: paths never leave their line; the kernels skip the
+  // term).
   chunk.slips = slip_penalty_ > 0.0f;
   chunk.tolerance = tolerance_;
   chunk.raw = raw_.data();
@@ -316,6 +323,9 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.smallest = smallest_.data();
   chunk.prior = prior_active_ ? pace_prior_.data() : nullptr;
   chunk.with_prior = prior_active_ ? with_prior_.data() : nullptr;
+  if (prior_active_)
+    searched_.resize(n);
+  chunk.searched = prior_active_ ? searched_.data() : nullptr;
   // M_{t-1} is read while M_t is written: both keep pad_ typical places on each side.
   std::swap(best_, old_best_);
   best_.resize(old_best_.size());
@@ -352,9 +362,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     const pace_kernels::ChunkSums sums = kernel_(chunk);
     distance_sum += sums.sum;
     square_sum += sums.squares;
-    chunk_minimum_[k] = costOf(sums.minimum);
-    if (prior_active_)
-      chunk_minimum_[k] = static_cast<float>(chunkMinimumWithPrior(k, chunk.m)) / pace_kernels::kOne;
+    chunk_minimum_[k] = prior_active_ ? searchedCostOf(sums.searched_minimum) : costOf(sums.minimum);
   }
   flipped_ = bidirectional_ && !flipped_;
   const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
@@ -366,29 +374,6 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
 int16_t PaceMatcher::costAt(size_t column, size_t pace) const
 {
   return current(pace)[(column / kChunk * slopes_.size() + pace) * segment_ + margin_ + column % kChunk];
-}
-
-int32_t PaceMatcher::costWithPrior(size_t column) const
-{
-  int32_t lowest = std::numeric_limits<int32_t>::max(), with_prior = std::numeric_limits<int32_t>::max();
-  for (size_t v = 0; v < slopes_.size(); ++v)
-  {
-    const int32_t c = costAt(column, v);
-    lowest = std::min(lowest, c);
-    with_prior = std::min(with_prior, c + pace_prior_[v]);
-  }
-  return int32_t(best_[pad_ + column]) - lowest + with_prior;
-}
-
-int32_t PaceMatcher::chunkMinimumWithPrior(size_t chunk, size_t m) const
-{
-  // costWithPrior() of the chunk's places from what the kernel kept: each place's smallest cost and its smallest
-  // cost plus prior (the same integers, which smallestDistinct() compares with).
-  const int16_t* best = best_.data() + pad_ + chunk * kChunk;
-  int32_t minimum = std::numeric_limits<int32_t>::max();
-  for (size_t i = 0; i < m; ++i)
-    minimum = std::min(minimum, int32_t(best[i]) - int32_t(smallest_[i]) + int32_t(with_prior_[i]));
-  return minimum;
 }
 
 size_t PaceMatcher::paceIndex(size_t column) const
@@ -405,9 +390,7 @@ float PaceMatcher::value(size_t column, int* direction) const
 {
   if (direction)
     *direction = slopes_[paceIndex(column)].first > 0 ? 1 : -1;
-  if (prior_active_)
-    return static_cast<float>(costWithPrior(column)) / pace_kernels::kOne;
-  return costOf(best_[pad_ + column]);
+  return prior_active_ ? searchedCostOf(searched_[column]) : costOf(best_[pad_ + column]);
 }
 
 float PaceMatcher::normalized(size_t column, int* direction, int min_terms) const
