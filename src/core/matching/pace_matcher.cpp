@@ -52,14 +52,8 @@ int16_t slipCost(float slip_penalty, float change_cost, double pace)
   return static_cast<int16_t>(std::min<double>(pace_kernels::kOne, std::round(cost)));
 }
 
-/// A cost of the kernels as a normalised distance.
-float costOf(int16_t cost)
-{
-  return static_cast<float>(cost) / static_cast<float>(pace_kernels::kOne);
-}
-
-/// A cost with the pace prior (pace_kernels::searchedCost) as a normalised distance.
-float searchedCostOf(uint16_t cost)
+/// A cost of the kernels (M, or a cost with the pace prior: pace_kernels::searchedCost) as a normalised distance.
+float costOf(int32_t cost)
 {
   return static_cast<float>(cost) / static_cast<float>(pace_kernels::kOne);
 }
@@ -139,6 +133,7 @@ void PaceMatcher::reset()
   flipped_ = false;
   best_.clear();
   old_best_.clear();
+  searched_.clear();
   chunk_minimum_.clear();
 }
 
@@ -362,7 +357,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
     const pace_kernels::ChunkSums sums = kernel_(chunk);
     distance_sum += sums.sum;
     square_sum += sums.squares;
-    chunk_minimum_[k] = prior_active_ ? searchedCostOf(sums.searched_minimum) : costOf(sums.minimum);
+    chunk_minimum_[k] = prior_active_ ? costOf(sums.searched_minimum) : costOf(sums.minimum);
   }
   flipped_ = bidirectional_ && !flipped_;
   const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
@@ -390,7 +385,7 @@ float PaceMatcher::value(size_t column, int* direction) const
 {
   if (direction)
     *direction = slopes_[paceIndex(column)].first > 0 ? 1 : -1;
-  return prior_active_ ? searchedCostOf(searched_[column]) : costOf(best_[pad_ + column]);
+  return prior_active_ ? costOf(searched_[column]) : costOf(best_[pad_ + column]);
 }
 
 float PaceMatcher::normalized(size_t column, int* direction, int min_terms) const
