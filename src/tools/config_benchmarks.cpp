@@ -19,6 +19,9 @@
 //   BM_ConfigMatchLength/gardens_point/10000000/<L>
 //                                     BM_ConfigMatch with another sequence length: a frame reads each descriptor
 //                                     once, so its cost should not depend on L
+//   BM_ConfigPaceMatchLength/default/1000000/<L>
+//                                     BM_ConfigPaceMatch with another sequence length: the paths' memory is a
+//                                     weight (a = 1 - 1/L), not a window, so neither should its cost
 //
 // N = 1e5, 1e6, and 1e7 when a place takes at most 64 bytes (a 1e7-place map of HOG would be 13 GB).
 #include "config_benchmarks.h"
@@ -36,8 +39,8 @@
 
 #include "openable/config.h"
 #include "openable/description/frame_describer.h"
-#include "openable/matching/pace_matcher.h"
 #include "openable/map/place_database.h"
+#include "openable/matching/pace_matcher.h"
 #include "openable/matching/sequence_matcher.h"
 
 namespace openable_bench
@@ -184,9 +187,12 @@ void configMatch(benchmark::State& state, const std::string& name, size_t n, int
   setBytes(state, db);
 }
 
-void configPaceMatch(benchmark::State& state, const std::string& name, size_t n, bool slip, bool searching)
+/// `sequence_length` 0: the config's own.
+void configPaceMatch(benchmark::State& state, const std::string& name, size_t n, bool slip, bool searching,
+                     int sequence_length)
 {
   const openable::Config config = shipped(name);
+  const int L = sequence_length > 0 ? sequence_length : config.sequence_length;
   const openable::PlaceDatabase& db = database(name, n);
   openable::PaceOptions pace;
   pace.max_pace = std::max(3, config.max_pace);
@@ -194,7 +200,7 @@ void configPaceMatch(benchmark::State& state, const std::string& name, size_t n,
   pace.tolerance = config.pace_tolerance;
   pace.slip = slip ? static_cast<float>(config.slip_penalty) : 0.0f;
   pace.prior = static_cast<float>(config.pace_prior);
-  openable::PaceMatcher matcher(db.layout(), config.sequence_length, config.bidirectional, pace);
+  openable::PaceMatcher matcher(db.layout(), L, config.bidirectional, pace);
   matcher.setSearching(searching);
   std::mt19937_64 rng(99);
   std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));
@@ -248,19 +254,23 @@ void registerConfigBenchmarks()
       const std::string suffix = name + "/" + std::to_string(n);
       benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n, 0)
           ->Unit(benchmark::kMillisecond);
-      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n, true,
-                                   true)
+      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n, true, true, 0)
           ->Unit(benchmark::kMillisecond);
       if (shipped(name).pace_prior > 0.0)  // else BM_ConfigPaceMatch is this frame already
-        benchmark::RegisterBenchmark(("BM_ConfigPaceMatchPublished/" + suffix).c_str(), configPaceMatch, name, n,
-                                     true, false)
+        benchmark::RegisterBenchmark(("BM_ConfigPaceMatchPublished/" + suffix).c_str(), configPaceMatch, name, n, true,
+                                     false, 0)
             ->Unit(benchmark::kMillisecond);
       if (shipped(name).slip_penalty > 0.0)  // else BM_ConfigPaceMatch is this frame already
         benchmark::RegisterBenchmark(("BM_ConfigPaceMatchNoSlip/" + suffix).c_str(), configPaceMatch, name, n, false,
-                                     true)
+                                     true, 0)
             ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
           ->Unit(benchmark::kMillisecond);
+      if (name == "default" && n == 1000000)
+        for (int L : {10, 30, 100, 300})
+          benchmark::RegisterBenchmark(("BM_ConfigPaceMatchLength/" + suffix + "/" + std::to_string(L)).c_str(),
+                                       configPaceMatch, name, n, true, true, L)
+              ->Unit(benchmark::kMillisecond);
       if (name != "gardens_point" || n != 10000000)
         continue;
       for (int L : {10, 50, 100, 300})  // 300: longer than a chunk of columns (256)
