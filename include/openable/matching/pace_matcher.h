@@ -195,8 +195,6 @@ private:
   bool searching_ = true;
   bool prior_active_ = false;         ///< the last frame's costs carry the prior (searching, prior_fraction_ > 0)
   std::vector<uint16_t> pace_prior_;  ///< per pace, in the fixed point, for the last frame
-  /// Per place of a chunk: its smallest cost plus prior (the kernel's scratch).
-  std::vector<uint16_t, CacheAligned<uint16_t>> with_prior_;
   /// Per place, while the prior is active: M - min_v C[j, v] + min_v (C[j, v] + prior[v]) in the fixed point (M
   /// differs from min_v C by the own-distance term of pace_tolerance), as the kernel wrote it.
   std::vector<uint16_t> searched_;

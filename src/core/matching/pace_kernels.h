@@ -62,16 +62,14 @@ struct Chunk
   int16_t* smallest;     ///< the smallest cost of each place
   int16_t* with_change;  ///< M' + change for each offset, `stride` entries each
   size_t stride;
-  /// While the matcher searches (PaceMatcher's pace prior; both null otherwise): each pace's prior, and scratch for the
-  /// smallest cost plus its pace's prior of each place. Unsigned: a cost and a prior are each at most kOne, so the
-  /// sum is exact, and the kernel keeps it as it writes the costs (a pass over the 17 rows after the kernel, still
-  /// in L2, took as long as the kernel).
+  /// While the matcher searches (PaceMatcher's pace prior; both null otherwise): each pace's prior, and each place's
+  /// cost with the prior, indexed by place as `best`: its smallest cost plus its pace's prior (the kernel keeps the
+  /// running minimum here pace by pace as it writes the costs; a pass over the 17 rows after the kernel, still in
+  /// L2, took as long as the kernel), plus M's own-distance term (`extra`). Unsigned: a cost and a prior are each at
+  /// most kOne, so the sum is exact; saturated at 2.0. smallestDistinct() reads one value a place (adding the prior
+  /// pace by pace there, over every place of the chunks it scanned again, made a searching frame at 1e5 places six
+  /// times a published one).
   const uint16_t* prior = nullptr;
-  uint16_t* with_prior = nullptr;
-  /// While searching, each place's cost with the prior, indexed by place as `best`: its smallest cost plus prior
-  /// and the own-distance term of M (`extra`), unsigned and saturated at 2.0, so that smallestDistinct() reads one
-  /// value a place (adding the prior pace by pace there, over every place of the chunks it scanned again, made a
-  /// searching frame at 1e5 places six times a published one).
   uint16_t* searched = nullptr;
 };
 
@@ -179,12 +177,10 @@ inline void update(const Chunk& c, size_t i, ChunkSums& sums)
     if (c.prior)
       with_prior = std::min(with_prior, static_cast<uint16_t>(static_cast<uint16_t>(cost) + c.prior[v]));
   }
-  c.smallest[i] = best;
   c.best[j] = addSaturated(best, c.extra[i]);
   sums.minimum = std::min(sums.minimum, c.best[j]);
   if (c.prior)
   {
-    c.with_prior[i] = with_prior;
     c.searched[j] = searchedCost(with_prior, c.extra[i]);
     sums.searched_minimum = std::min(sums.searched_minimum, c.searched[j]);
   }

@@ -160,9 +160,11 @@ __attribute__((target("avx512f,avx512bw"))) inline void paces512(const Chunk& c,
     const __m512i prior = _mm512_set1_epi16(static_cast<int16_t>(c.prior ? c.prior[v] : 0));
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
     if (row.from == row.to)
-      forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip, c.with_prior, prior);
+      forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip,
+                        c.searched ? c.searched + c.begin : nullptr, prior);
     else
-      reverse512<kSlip>(row, with_change, c.entry, best, whole, top, keep, slip, c.with_prior, prior);
+      reverse512<kSlip>(row, with_change, c.entry, best, whole, top, keep, slip,
+                        c.searched ? c.searched + c.begin : nullptr, prior);
   }
 }
 
@@ -223,7 +225,8 @@ __attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* be
     for (size_t k = whole; k > 0;)
     {
       k -= 16;
-      pace256<kSlip>(from, row.to, with_change, c.entry, best, k, keep, further, fewer, slip, c.with_prior, prior);
+      pace256<kSlip>(from, row.to, with_change, c.entry, best, k, keep, further, fewer, slip,
+                     c.searched ? c.searched + c.begin : nullptr, prior);
     }
   }
 }
@@ -274,9 +277,10 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
   int16_t* best = c.smallest;
   for (size_t i = 0; i < m; i += 32)
     _mm512_storeu_si512(best + i, highest);
-  if (c.prior)
+  uint16_t* searched = c.searched ? c.searched + c.begin : nullptr;
+  if (searched)
     for (size_t i = 0; i < m; i += 32)
-      _mm512_storeu_si512(c.with_prior + i, _mm512_set1_epi16(-1));
+      _mm512_mask_storeu_epi16(searched + i, i < whole ? ~__mmask32(0) : top, _mm512_set1_epi16(-1));
   if (c.slips)
     paces512<true>(c, best, whole, top, keep);
   else
@@ -292,18 +296,18 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
     const __m512i value = _mm512_adds_epi16(_mm512_maskz_loadu_epi16(mask, best + i), extra);
     _mm512_mask_storeu_epi16(out + i, mask, value);
     minimum = _mm512_min_epi16(minimum, _mm512_mask_blend_epi16(mask, highest, value));
-    if (c.prior)
+    if (searched)
     {
-      const __m512i searched =
-          _mm512_adds_epu16(_mm512_maskz_loadu_epi16(mask, reinterpret_cast<const int16_t*>(c.with_prior) + i), extra);
-      _mm512_mask_storeu_epi16(c.searched + c.begin + i, mask, searched);
-      searched_minimum = _mm512_min_epu16(searched_minimum, _mm512_mask_blend_epi16(mask, unsigned_highest, searched));
+      int16_t* lanes = reinterpret_cast<int16_t*>(searched) + i;
+      const __m512i cost = _mm512_adds_epu16(_mm512_maskz_loadu_epi16(mask, lanes), extra);
+      _mm512_mask_storeu_epi16(lanes, mask, cost);
+      searched_minimum = _mm512_min_epu16(searched_minimum, _mm512_mask_blend_epi16(mask, unsigned_highest, cost));
     }
   }
   const __m512i low = _mm512_cvtepi16_epi32(_mm512_castsi512_si256(minimum));
   const __m512i high = _mm512_cvtepi16_epi32(_mm512_extracti64x4_epi64(minimum, 1));
   sums.minimum = static_cast<int16_t>(_mm512_reduce_min_epi32(_mm512_min_epi32(low, high)));
-  if (c.prior)
+  if (searched)
   {
     const __m512i low_searched = _mm512_cvtepu16_epi32(_mm512_castsi512_si256(searched_minimum));
     const __m512i high_searched = _mm512_cvtepu16_epi32(_mm512_extracti64x4_epi64(searched_minimum, 1));
@@ -361,8 +365,9 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
   int16_t* best = c.smallest;
   for (size_t k = 0; k < whole; k += 16)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + k), highest);
-  if (c.prior)
-    std::fill_n(c.with_prior, whole, UINT16_MAX);
+  uint16_t* searched = c.searched ? c.searched + c.begin : nullptr;
+  if (searched)
+    std::fill_n(searched, whole, UINT16_MAX);
   if (c.slips)
     paces256<true>(c, best, whole, keep);
   else
@@ -375,21 +380,21 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
     const __m256i value = _mm256_adds_epi16(load256(best + k), extra);
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + k), value);
     minimum = _mm256_min_epi16(minimum, value);
-    if (c.prior)
+    if (searched)
     {
-      const __m256i searched =
-          _mm256_adds_epu16(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(c.with_prior + k)), extra);
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(c.searched + c.begin + k), searched);
-      searched_minimum = _mm256_min_epu16(searched_minimum, searched);
+      auto* lanes = reinterpret_cast<__m256i*>(searched + k);
+      const __m256i cost = _mm256_adds_epu16(_mm256_loadu_si256(lanes), extra);
+      _mm256_storeu_si256(lanes, cost);
+      searched_minimum = _mm256_min_epu16(searched_minimum, cost);
     }
   }
   alignas(32) int16_t values[16];
   _mm256_store_si256(reinterpret_cast<__m256i*>(values), minimum);
   for (int16_t x : values)
     sums.minimum = std::min(sums.minimum, x);
-  alignas(32) uint16_t searched[16];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(searched), searched_minimum);
-  for (uint16_t x : searched)
+  alignas(32) uint16_t minima[16];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(minima), searched_minimum);
+  for (uint16_t x : minima)
     sums.searched_minimum = std::min(sums.searched_minimum, x);
   return sums;
 }

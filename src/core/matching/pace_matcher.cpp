@@ -93,7 +93,6 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
   entry_.resize(kChunk);
   extra_.resize(kChunk);
   smallest_.resize(kChunk);
-  with_prior_.resize(kChunk);
 }
 
 void PaceMatcher::setSequenceLength(int sequence_length)
@@ -317,7 +316,6 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
   chunk.stride = kChunk;
   chunk.smallest = smallest_.data();
   chunk.prior = prior_active_ ? pace_prior_.data() : nullptr;
-  chunk.with_prior = prior_active_ ? with_prior_.data() : nullptr;
   if (prior_active_)
     searched_.resize(n);
   chunk.searched = prior_active_ ? searched_.data() : nullptr;
