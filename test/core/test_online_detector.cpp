@@ -322,7 +322,9 @@ TEST(OnlineDetector, NoLoopAmongLookAlikePlacesNordlandSummerThenWinter)
       EXPECT_LE(t - 1800, 546u) << "a wrong loop outside the look-alike stretch";
       EXPECT_FALSE(now[t].published()) << t - 1800;
       if (now[t].stored)  // (a frame standing still repeats the last stored one's decision: standstill)
+      {
         EXPECT_EQ(now[t].status, FrameStatus::Featureless) << t - 1800;
+      }
     }
 }
 
