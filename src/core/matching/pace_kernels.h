@@ -73,6 +73,12 @@ struct Chunk
   uint16_t* searched = nullptr;
 };
 
+/// The chunk's first place's cost with the prior (Chunk::searched at place `begin`), or null while not searching.
+inline uint16_t* searchedOf(const Chunk& c)
+{
+  return c.searched ? c.searched + c.begin : nullptr;
+}
+
 /// Sums over the chunk's own distances (the row's mean and spread give the next frame its prior and its change
 /// cost), in integers so that they do not depend on the kernel.
 struct ChunkSums

@@ -151,7 +151,7 @@ __attribute__((target("avx512f,avx512bw"))) inline void reverse512(const PaceRow
 /// Every pace of the chunk, forward in place or reverse from the other buffer (kSlip: with the slip term).
 template <bool kSlip>
 __attribute__((target("avx512f,avx512bw"))) inline void paces512(const Chunk& c, int16_t* best, size_t whole,
-                                                                 __mmask32 top, __m512i keep)
+                                                                 __mmask32 top, __m512i keep, uint16_t* searched)
 {
   for (size_t v = 0; v < c.paces; ++v)
   {
@@ -160,11 +160,9 @@ __attribute__((target("avx512f,avx512bw"))) inline void paces512(const Chunk& c,
     const __m512i prior = _mm512_set1_epi16(static_cast<int16_t>(c.prior ? c.prior[v] : 0));
     const int16_t* with_change = c.with_change + c.slot[v] * c.stride;
     if (row.from == row.to)
-      forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip,
-                        c.searched ? c.searched + c.begin : nullptr, prior);
+      forward512<kSlip>(row.to, -row.offset, with_change, c.entry, best, whole, top, keep, slip, searched, prior);
     else
-      reverse512<kSlip>(row, with_change, c.entry, best, whole, top, keep, slip,
-                        c.searched ? c.searched + c.begin : nullptr, prior);
+      reverse512<kSlip>(row, with_change, c.entry, best, whole, top, keep, slip, searched, prior);
   }
 }
 
@@ -211,7 +209,8 @@ __attribute__((target("avx2"))) inline void pace256(const int16_t* from, int16_t
 /// Every pace over the chunk's whole blocks of 16, from the top block down (kSlip: with the slip term). Forward rows
 /// are updated in place, so the places one off the line (at most the block itself) are still the previous frame's.
 template <bool kSlip>
-__attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* best, size_t whole, __m256i keep)
+__attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* best, size_t whole, __m256i keep,
+                                                     uint16_t* searched)
 {
   for (size_t v = 0; v < c.paces; ++v)
   {
@@ -225,8 +224,7 @@ __attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* be
     for (size_t k = whole; k > 0;)
     {
       k -= 16;
-      pace256<kSlip>(from, row.to, with_change, c.entry, best, k, keep, further, fewer, slip,
-                     c.searched ? c.searched + c.begin : nullptr, prior);
+      pace256<kSlip>(from, row.to, with_change, c.entry, best, k, keep, further, fewer, slip, searched, prior);
     }
   }
 }
@@ -277,14 +275,14 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
   int16_t* best = c.smallest;
   for (size_t i = 0; i < m; i += 32)
     _mm512_storeu_si512(best + i, highest);
-  uint16_t* searched = c.searched ? c.searched + c.begin : nullptr;
+  uint16_t* searched = searchedOf(c);
   if (searched)
     for (size_t i = 0; i < m; i += 32)
       _mm512_mask_storeu_epi16(searched + i, i < whole ? ~__mmask32(0) : top, _mm512_set1_epi16(-1));
   if (c.slips)
-    paces512<true>(c, best, whole, top, keep);
+    paces512<true>(c, best, whole, top, keep, searched);
   else
-    paces512<false>(c, best, whole, top, keep);
+    paces512<false>(c, best, whole, top, keep, searched);
   __m512i minimum = highest;
   const __m512i unsigned_highest = _mm512_set1_epi16(-1);
   __m512i searched_minimum = unsigned_highest;
@@ -365,13 +363,13 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
   int16_t* best = c.smallest;
   for (size_t k = 0; k < whole; k += 16)
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(best + k), highest);
-  uint16_t* searched = c.searched ? c.searched + c.begin : nullptr;
+  uint16_t* searched = searchedOf(c);
   if (searched)
     std::fill_n(searched, whole, UINT16_MAX);
   if (c.slips)
-    paces256<true>(c, best, whole, keep);
+    paces256<true>(c, best, whole, keep, searched);
   else
-    paces256<false>(c, best, whole, keep);
+    paces256<false>(c, best, whole, keep, searched);
   __m256i minimum = highest, searched_minimum = _mm256_set1_epi16(-1);
   int16_t* out = c.best + c.begin;
   for (size_t k = 0; k < whole; k += 16)
