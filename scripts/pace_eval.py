@@ -5,7 +5,7 @@ it published with openable_eval against the stream's own ground truth.
 
   scripts/pace_eval.py --first DIR --second DIR --config FILE.yaml --out DIR [--profile P]... [--first-profile P]
                        [--tolerance T] [--frames N] [--start S] [--bin DIR] [--set key=value]... [--camera-info FILE]
-                       [--jobs N] [--markdown] [--misses]
+                       [--jobs N] [--markdown] [--misses] [--trace]
 
 A profile resamples a traversal of n frames (no synthetic image: frames are skipped or repeated):
   1x            every frame once (the first pass's pace)
@@ -24,6 +24,9 @@ traversal that shows a place within T of k (openable_eval --pairs). The first tr
 --frames N takes the first N frames of each traversal (a short route), --start S skips the first S of each first.
 Prints one line per profile: published, wrong, precision, recall (and --markdown, a table row); --misses adds where
 the recall went: the statuses (in decisions.csv) of the frames that have a true loop and got no right one published.
+--trace writes OUT/PROFILE/trace.csv, one row per frame of the second traversal: the place it shows, its best match
+as a place of the first traversal (or `own` when it is a frame of the second), how far off that is (match - place),
+its status, score and pace (decisions.csv): where a run lags or leads the revisit, frame by frame.
 """
 import argparse
 import concurrent.futures
@@ -104,6 +107,34 @@ def images(folder):
     return [os.path.join(folder, f) for f in sorted(names, key=natural)]
 
 
+def stream_places(args):
+    """The places (frame indices of a traversal) the stream's frames show: the first traversal's, then the second's."""
+    first, second = images(args.first)[args.start:], images(args.second)[args.start:]
+    n = min(len(first), len(second), args.frames or len(first))
+    return profile_indices(args.first_profile, n), profile_indices(args.profile_now, n)
+
+
+def write_trace(args, out):
+    """out/trace.csv from out/run/decisions.csv (--trace)."""
+    first_places, second_places = stream_places(args)
+    with open(os.path.join(out, 'run', 'decisions.csv')) as f:
+        header = f.readline().strip().split(',')
+        rows = [dict(zip(header, line.strip().split(','))) for line in f]
+    lines = ['frame,place,match,off,status,score,pace']
+    for frame in range(len(first_places), len(rows)):
+        row, place = rows[frame], second_places[frame - len(first_places)]
+        match = int(row['match'])
+        if match < 0:
+            matched, off = '', ''
+        elif match < len(first_places):
+            matched, off = str(first_places[match]), str(first_places[match] - place)
+        else:
+            matched, off = 'own', ''
+        lines.append(','.join([str(frame), str(place), matched, off, row['status'], row['score'], row['pace']]))
+    with open(os.path.join(out, 'trace.csv'), 'w') as f:
+        f.write('\n'.join(lines) + '\n')
+
+
 def build_stream(args, profile, out):
     """Writes out/stream/ (symbolic links to the real frames) and out/pairs.txt; returns the frame count."""
     first, second = images(args.first)[args.start:], images(args.second)[args.start:]
@@ -166,6 +197,8 @@ def run(args, profile):
                     '--output', os.path.join(out, 'eval')], check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, 'eval', 'metrics.json')) as f:
         metrics = json.load(f)
+    if args.trace:
+        write_trace(argparse.Namespace(**dict(vars(args), profile_now=profile)), out)
     return profile, frames, metrics, misses(out)
 
 
@@ -201,6 +234,7 @@ def main():
     parser.add_argument('--frames', type=int, default=0)
     parser.add_argument('--start', type=int, default=0)
     parser.add_argument('--misses', action='store_true')
+    parser.add_argument('--trace', action='store_true')
     parser.add_argument('--bin', default=os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'build', 'ws',
                                                       'devel', 'lib', 'openable_ros'))
     parser.add_argument('--set', action='append', default=[])
