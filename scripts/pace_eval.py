@@ -107,16 +107,16 @@ def images(folder):
     return [os.path.join(folder, f) for f in sorted(names, key=natural)]
 
 
-def stream_places(args):
-    """The places (frame indices of a traversal) the stream's frames show: the first traversal's, then the second's."""
+def traversals(args, profile):
+    """The two traversals' images and the places (indices into them) the stream's frames show, in order."""
     first, second = images(args.first)[args.start:], images(args.second)[args.start:]
     n = min(len(first), len(second), args.frames or len(first))
-    return profile_indices(args.first_profile, n), profile_indices(args.profile_now, n)
+    return first, second, profile_indices(args.first_profile, n), profile_indices(profile, n)
 
 
-def write_trace(args, out):
+def write_trace(args, profile, out):
     """out/trace.csv from out/run/decisions.csv (--trace)."""
-    first_places, second_places = stream_places(args)
+    _, _, first_places, second_places = traversals(args, profile)
     with open(os.path.join(out, 'run', 'decisions.csv')) as f:
         header = f.readline().strip().split(',')
         rows = [dict(zip(header, line.strip().split(','))) for line in f]
@@ -137,10 +137,7 @@ def write_trace(args, out):
 
 def build_stream(args, profile, out):
     """Writes out/stream/ (symbolic links to the real frames) and out/pairs.txt; returns the frame count."""
-    first, second = images(args.first)[args.start:], images(args.second)[args.start:]
-    n = min(len(first), len(second), args.frames or len(first))
-    first_places = profile_indices(args.first_profile, n)
-    second_places = profile_indices(profile, n)
+    first, second, first_places, second_places = traversals(args, profile)
     stream = os.path.join(out, 'stream')
     os.makedirs(stream, exist_ok=True)
     for name in os.listdir(stream):
@@ -198,7 +195,7 @@ def run(args, profile):
     with open(os.path.join(out, 'eval', 'metrics.json')) as f:
         metrics = json.load(f)
     if args.trace:
-        write_trace(argparse.Namespace(**dict(vars(args), profile_now=profile)), out)
+        write_trace(args, profile, out)
     return profile, frames, metrics, misses(out)
 
 
