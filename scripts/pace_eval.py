@@ -107,19 +107,15 @@ def images(folder):
     return [os.path.join(folder, f) for f in sorted(names, key=natural)]
 
 
-def traversals(args, profile):
-    """The two traversals' images and the places (indices into them) the stream's frames show, in order."""
-    first, second = images(args.first)[args.start:], images(args.second)[args.start:]
-    n = min(len(first), len(second), args.frames or len(first))
-    return first, second, profile_indices(args.first_profile, n), profile_indices(profile, n)
-
-
-def write_trace(args, profile, out):
-    """out/trace.csv from out/run/decisions.csv (--trace)."""
-    _, _, first_places, second_places = traversals(args, profile)
+def decisions(out):
+    """out/run/decisions.csv as one dict a frame (openable_offline's columns), in frame order."""
     with open(os.path.join(out, 'run', 'decisions.csv')) as f:
         header = f.readline().strip().split(',')
-        rows = [dict(zip(header, line.strip().split(','))) for line in f]
+        return [dict(zip(header, line.strip().split(','))) for line in f]
+
+
+def write_trace(out, rows, first_places, second_places):
+    """out/trace.csv from the frames' decisions (--trace)."""
     lines = ['frame,place,match,off,status,score,pace']
     for frame in range(len(first_places), len(rows)):
         row, place = rows[frame], second_places[frame - len(first_places)]
@@ -136,8 +132,12 @@ def write_trace(args, profile, out):
 
 
 def build_stream(args, profile, out):
-    """Writes out/stream/ (symbolic links to the real frames) and out/pairs.txt; returns the frame count."""
-    first, second, first_places, second_places = traversals(args, profile)
+    """Writes out/stream/ (symbolic links to the real frames) and out/pairs.txt; returns the places the stream's frames
+    show (indices into each traversal, in order): the first traversal's and the second's."""
+    first, second = images(args.first)[args.start:], images(args.second)[args.start:]
+    n = min(len(first), len(second), args.frames or len(first))
+    first_places = profile_indices(args.first_profile, n)
+    second_places = profile_indices(profile, n)
     stream = os.path.join(out, 'stream')
     os.makedirs(stream, exist_ok=True)
     for name in os.listdir(stream):
@@ -153,7 +153,7 @@ def build_stream(args, profile, out):
             for m, place in enumerate(first_places):
                 if abs(place - k) <= args.tolerance:
                     f.write('%d %d\n' % (len(first_places) + q, m))
-    return total
+    return first_places, second_places
 
 
 # One profile's line as main() prints it (without --markdown).
@@ -181,7 +181,8 @@ def evaluate(first, second, tolerance, config, out, profiles, bin_dir, jobs=2, s
 def run(args, profile):
     out = os.path.join(args.out, re.sub(r'[^A-Za-z0-9.]+', '_', profile))
     os.makedirs(out, exist_ok=True)
-    frames = build_stream(args, profile, out)
+    first_places, second_places = build_stream(args, profile, out)
+    frames = len(first_places) + len(second_places)
     command = [os.path.join(args.bin, 'openable_offline'), '--quiet', '--config', args.config,
                '--reference', os.path.join(out, 'stream'), '--output', os.path.join(out, 'run')]
     for assignment in args.set:
@@ -194,12 +195,13 @@ def run(args, profile):
                     '--output', os.path.join(out, 'eval')], check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, 'eval', 'metrics.json')) as f:
         metrics = json.load(f)
+    rows = decisions(out)
     if args.trace:
-        write_trace(args, profile, out)
-    return profile, frames, metrics, misses(out)
+        write_trace(out, rows, first_places, second_places)
+    return profile, frames, metrics, misses(out, rows)
 
 
-def misses(out):
+def misses(out, rows):
     """Status counts of the frames with a true loop that got no right loop closure published."""
     truth = {}
     with open(os.path.join(out, 'pairs.txt')) as f:
@@ -208,14 +210,11 @@ def misses(out):
                 query, match = map(int, line.split())
                 truth.setdefault(query, set()).add(match)
     counts = {}
-    with open(os.path.join(out, 'run', 'decisions.csv')) as f:
-        header = f.readline().strip().split(',')
-        for line in f:
-            row = dict(zip(header, line.strip().split(',')))
-            query, match = int(row['query']), int(row['match'])
-            if query in truth and not (row['status'] == 'published' and match in truth[query]):
-                status = row['status'] if row['status'] != 'published' else 'published_wrong'
-                counts[status] = counts.get(status, 0) + 1
+    for row in rows:
+        query, match = int(row['query']), int(row['match'])
+        if query in truth and not (row['status'] == 'published' and match in truth[query]):
+            status = row['status'] if row['status'] != 'published' else 'published_wrong'
+            counts[status] = counts.get(status, 0) + 1
     return counts
 
 
