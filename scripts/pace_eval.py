@@ -195,10 +195,11 @@ def run(args, profile):
                     '--output', os.path.join(out, 'eval')], check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, 'eval', 'metrics.json')) as f:
         metrics = json.load(f)
-    rows = decisions(out)
+    # decisions.csv is read only for what was asked: pace_sets.py and pace_sweep.py run thousands of profiles without.
+    rows = decisions(out) if args.trace or args.misses else []
     if args.trace:
         write_trace(out, rows, first_places, second_places)
-    return profile, frames, metrics, misses(out, rows)
+    return profile, frames, metrics, misses(out, rows) if args.misses else {}
 
 
 def misses(out, rows):
