@@ -591,3 +591,46 @@ TEST(LoopDecision, TheReachBackPassesOverFeaturelessFrames)
   EXPECT_EQ(decision.decide(withRelief(13, 3.0f)), FrameStatus::Published);  // the run coasted: 4 frames
   EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{2, 3}));
 }
+
+TEST(LoopDecision, APublishedRunCatchesUpAFewPlacesAheadAtAnyPaceOnly)
+{
+  // A path of a faster pace takes over from one that lagged the revisit: the match jumps ahead of the run's line. Up to
+  // kCatchUpPlaces ahead the run goes on, on a line at the new path's pace; further, behind, or at one pace, it breaks.
+  Config c = decisionConfig();  // min_uniqueness 0.1, consistent_frames 3, consistency_tolerance 1
+  c.max_pace = 3;
+  const auto publishRun = [](LoopDecision& decision)
+  {
+    for (uint64_t m : {10, 11})
+      EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
+    for (uint64_t m : {12, 13})
+      EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Published);
+  };
+  const auto paced = [](uint64_t match, float pace)
+  {
+    Detection d = candidate(match, 0.3f);
+    d.best.pace = pace;
+    return d;
+  };
+  LoopDecision decision(c);
+  publishRun(decision);
+  EXPECT_FALSE(decision.catchingUp());
+  EXPECT_EQ(decision.decide(paced(17, 1.5f)), FrameStatus::Published);  // the line says 14: 3 ahead
+  EXPECT_TRUE(decision.catchingUp());                                   // the matcher goes on searching
+  EXPECT_EQ(decision.decide(paced(19, 1.5f)), FrameStatus::Published);  // on the new line (17 + 1.5)
+  EXPECT_TRUE(decision.catchingUp());
+  EXPECT_EQ(decision.decide(paced(20, 1.5f)), FrameStatus::Published);
+  EXPECT_TRUE(decision.catchingUp());
+  EXPECT_EQ(decision.decide(paced(22, 1.5f)), FrameStatus::Published);
+  EXPECT_FALSE(decision.catchingUp());  // consistent_frames frames after it
+
+  decision.reset();
+  publishRun(decision);
+  EXPECT_NE(decision.decide(paced(20, 1.5f)), FrameStatus::Published);  // 6 ahead: not a path catching up
+  EXPECT_FALSE(decision.catchingUp());
+
+  c.max_pace = 1;  // one pace: nothing faster can take over
+  LoopDecision one_pace(c);
+  publishRun(one_pace);
+  EXPECT_NE(one_pace.decide(paced(17, 1.0f)), FrameStatus::Published);
+  EXPECT_FALSE(one_pace.catchingUp());
+}
