@@ -259,7 +259,11 @@ int run(const Options& options)
     // frame's row is its number, where a later frame's confirmation finds it.
     csv.add(csvFrame(query, match, outcome, localisation ? static_cast<uint32_t>(map.sessionCount()) : own));
     for (const openable::FrameOutcome& earlier : outcome.confirmed)
+    {
       csv.setStatus(earlier.frame, openable::FrameStatus::Published);
+      if (earlier.detection.has_candidates)  // placed in hindsight, it may have moved
+        csv.setMatch(earlier.frame, numbers->stored(map, earlier.detection.best.session, earlier.detection.best.position, own));
+    }
     if (d.has_candidates && options.ground_truth_tolerance >= 0)
     {
       ++truth_checked;

@@ -483,4 +483,49 @@ TEST(LoopConfirmation, AFeaturelessFrameNeitherJoinsNorEndsWhatIsHeld)
   EXPECT_EQ(confirmed[0].status_before, FrameStatus::Inconsistent);
 }
 
+
+namespace
+{
+FrameOutcome matched(uint64_t query_id, uint64_t match, float pace, int direction = 1)
+{
+  FrameOutcome o = outcomeOf(query_id, FrameStatus::Published);
+  o.detection.has_candidates = true;
+  o.detection.query_id = query_id;
+  o.detection.best.id = match;
+  o.detection.best.position = match;
+  o.detection.best.pace = pace;
+  o.detection.best.direction = static_cast<int8_t>(direction);
+  o.has_match_info = true;
+  return o;
+}
+}  // namespace
+
+TEST(LoopConfirmation, AConfirmedLoopMovesWhereTheConfirmingFramesNewPathPutsItInHindsight)
+{
+  // The confirming frame (query 20) matches place 50 on a 1.5x path: 4 stored frames back it puts query 16 at 44.
+  const FrameOutcome now = matched(20, 50, 1.5f);
+  std::vector<FrameOutcome> confirmed = {matched(16, 41, 1.15f),   // 3 behind, another pace: moves to 44
+                                         matched(16, 43, 1.15f),   // 1 behind: the rounding of the line, stays
+                                         matched(16, 39, 1.15f),   // 5 behind: another path, stays
+                                         matched(16, 41, 1.5f),    // the same path's pace: it was not lagging, stays
+                                         matched(11, 33, 1.15f),   // 9 frames back (the path says 36): too far to draw it, stays
+                                         matched(16, 41, 1.15f, -1)};  // a reverse run: stays
+  placeInHindsight(confirmed, now);
+  EXPECT_EQ(confirmed[0].detection.best.id, 44u);
+  EXPECT_EQ(confirmed[0].detection.best.position, 44u);
+  EXPECT_FALSE(confirmed[0].has_match_info);  // the caller looks the moved place up
+  const std::vector<uint64_t> kept = {43, 39, 41, 33, 41};
+  for (size_t i = 1; i < confirmed.size(); ++i)
+  {
+    EXPECT_EQ(confirmed[i].detection.best.id, kept[i - 1]) << i;
+    EXPECT_TRUE(confirmed[i].has_match_info) << i;
+  }
+  // Nothing to draw back from: a confirming frame without candidates moves nothing.
+  FrameOutcome blind = now;
+  blind.detection.has_candidates = false;
+  std::vector<FrameOutcome> one = {matched(16, 41, 1.15f)};
+  placeInHindsight(one, blind);
+  EXPECT_EQ(one[0].detection.best.id, 41u);
+}
+
 }  // namespace openable

@@ -591,3 +591,63 @@ TEST(LoopDecision, TheReachBackPassesOverFeaturelessFrames)
   EXPECT_EQ(decision.decide(withRelief(13, 3.0f)), FrameStatus::Published);  // the run coasted: 4 frames
   EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{2, 3}));
 }
+
+TEST(LoopDecision, APublishedRunCatchesUpWhenAFasterPathHoldsForTwoFramesAFewPlacesAhead)
+{
+  // A path of a faster pace takes over from one that lagged the revisit: the match jumps ahead of the run's line, and
+  // the next frame goes on along the faster path. Then the run goes on, on a line at the new path's pace; a jump for
+  // one frame, one further than kCatchUpPlaces, one at the run's own pace, or at one pace, breaks it.
+  Config c = decisionConfig();  // min_uniqueness 0.1, consistency_tolerance 1
+  c.consistent_frames = 5;      // (at 3 the last frames' own line would take the faster path at once)
+  c.max_pace = 3;
+  c.run_resume_frames = 30;  // as config/default.yaml: a broken run resumes on its line (rule (h))
+  const auto publishRun = [](LoopDecision& decision)
+  {
+    for (uint64_t m : {10, 11, 12, 13})
+      EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
+    for (uint64_t m : {14, 15})
+      EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Published);
+  };
+  const auto paced = [](uint64_t match, float pace)
+  {
+    Detection d = candidate(match, 0.3f);
+    d.best.pace = pace;
+    return d;
+  };
+  LoopDecision decision(c);
+  publishRun(decision);
+  EXPECT_FALSE(decision.catchingUp());
+  EXPECT_EQ(decision.decide(paced(19, 1.5f)), FrameStatus::Inconsistent);  // the line says 16: 3 ahead
+  EXPECT_FALSE(decision.catchingUp());
+  EXPECT_EQ(decision.decide(paced(21, 1.5f)), FrameStatus::Published);  // on the faster path's line (19 + 1.5)
+  EXPECT_TRUE(decision.catchingUp());                                   // the matcher goes on searching
+  for (uint64_t m : {22, 24, 25, 27})
+  {
+    EXPECT_EQ(decision.decide(paced(m, 1.5f)), FrameStatus::Published) << m;
+    EXPECT_TRUE(decision.catchingUp()) << m;
+  }
+  EXPECT_EQ(decision.decide(paced(28, 1.5f)), FrameStatus::Published);
+  EXPECT_FALSE(decision.catchingUp());  // consistent_frames frames after it
+
+  const auto jumpThen = [&](uint64_t jump, float jump_pace, uint64_t next, float next_pace)
+  {
+    LoopDecision d(c);
+    publishRun(d);
+    EXPECT_NE(d.decide(paced(jump, jump_pace)), FrameStatus::Published) << jump;
+    const FrameStatus after = d.decide(paced(next, next_pace));
+    EXPECT_FALSE(d.catchingUp()) << jump << " then " << next;
+    return after;
+  };
+  // One frame on a faster path, then back on the run's line: the run resumes on the line it had.
+  EXPECT_EQ(jumpThen(19, 1.5f, 17, 1.0f), FrameStatus::Published);
+  EXPECT_EQ(jumpThen(19, 1.5f, 23, 1.5f), FrameStatus::Inconsistent);  // the next frame off the faster path's line
+  EXPECT_EQ(jumpThen(22, 1.5f, 24, 1.5f), FrameStatus::Inconsistent);  // 6 ahead: not a path catching up
+  EXPECT_EQ(jumpThen(19, 1.0f, 20, 1.0f), FrameStatus::Inconsistent);  // at the run's own pace: a place further on
+
+  c.max_pace = 1;  // one pace: nothing faster can take over
+  LoopDecision one_pace(c);
+  publishRun(one_pace);
+  EXPECT_NE(one_pace.decide(paced(19, 1.0f)), FrameStatus::Published);
+  EXPECT_NE(one_pace.decide(paced(20, 1.0f)), FrameStatus::Published);
+  EXPECT_FALSE(one_pace.catchingUp());
+}

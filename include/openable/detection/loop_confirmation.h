@@ -219,6 +219,18 @@ private:
 
 using LoopConfirmation = BasicLoopConfirmation<FrameOutcome>;
 
+/// Where the loop closures that `confirming` just confirmed lie in hindsight: its best path, drawn back at its pace,
+/// says where the revisit was at each of them. A loop closure of a forward run at most kHindsightFrames stored frames
+/// back, whose best path had another pace than the confirming frame's, moves there when that is kHindsightMin to
+/// kHindsightMax places from its own match (Candidate::id and position; has_match_info is cleared, the caller looks
+/// the place up again). Why: when a path of a faster pace takes over from one that lagged the revisit, it places the
+/// frames before it better than they were placed (doc/results.md "A loop placed in hindsight"); fewer places are the
+/// rounding of the line, more are another path, and at one pace the later path is not the better one.
+void placeInHindsight(std::vector<FrameOutcome>& confirmed, const FrameOutcome& confirming);
+constexpr uint64_t kHindsightFrames = 8;
+constexpr long kHindsightMin = 2;
+constexpr long kHindsightMax = 4;
+
 /// A stream's outcomes, in the order process() gave them, with every status final: a Pending frame that a
 /// later frame confirmed is Published (with the confirmed copy's fields), one that none confirmed is
 /// Unconfirmed. `confirmed` lists are emptied. What openable_offline writes to decisions.csv, for tests and tools

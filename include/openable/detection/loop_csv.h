@@ -48,6 +48,9 @@ public:
   size_t add(const LoopCsvFrame& frame);
   /// A later word on row `row` (Published once confirmed). Throws Error for a row that was never added.
   void setStatus(size_t row, FrameStatus status);
+  /// Row `row`'s match: a loop closure confirmed later may have moved (placeInHindsight). Throws Error when there is no such
+  /// row.
+  void setMatch(size_t row, long match);
   /// The stream ended: every row still pending becomes unconfirmed (no frame after it could confirm it).
   void settlePending();
   const std::vector<LoopCsvFrame>& frames() const

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -121,6 +122,16 @@ public:
   void setOptions(const DecisionOptions& options);
   /// Forgets the consistency run and the frames decided so far (a new stream, or a gap in it).
   void reset();
+  /// A published run caught up within the last consistent_frames frames (followsJump): the matcher should go on
+  /// searching (its pace prior on) as it would while a broken run became consistent again.
+  bool catchingUp() const
+  {
+    return frames_since_catch_up_ < static_cast<size_t>(std::max(0, options_.consistent_frames));
+  }
+  /// The most places a published run's match may jump ahead of its line and the run goes on (catchesUp).
+  static constexpr double kCatchUpPlaces = 5.0;
+  /// How much faster (places a frame) than the run's line the path that catches up must be.
+  static constexpr double kFasterPace = 0.05;
 
 private:
   bool gatesPass(const Detection& detection, FrameStatus& why) const;
@@ -155,8 +166,15 @@ private:
   /// on its line extended (within consistency_tolerance), as unique as a published run's frame must be
   /// (continue_uniqueness).
   bool resumesPublishedLine(const Detection& detection, FrameStatus why) const;
-  /// The run resumes as published, on a line of the old slope through this frame's match (resumesPublishedLine).
-  FrameStatus resumeRun(const Detection& detection);
+  /// The published run's match jumps ahead of its line, by more than consistency_tolerance and at most
+  /// kCatchUpPlaces, on a path faster than the line: a path of a faster pace may be taking over from one that lagged
+  /// the revisit (followsJump decides on the next frame).
+  bool catchesUp(const Detection& detection) const;
+  /// The frame after a jump ahead (catchesUp) is on the faster path's line from it: the run has caught up.
+  bool followsJump(const Detection& detection) const;
+  /// The run resumes as published, on a line of `slope` places a frame through this frame's match
+  /// (resumesPublishedLine: the old line's; followsJump: the new best path's pace).
+  FrameStatus resumeRun(const Detection& detection, double slope);
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
 
@@ -194,6 +212,15 @@ private:
   };
   std::deque<Past> past_;
   std::deque<float> reliefs_;  ///< Detection::relief of the last kReliefFrames frames that had one
+  /// The last frame's match, when it jumped ahead of the published run's line (catchesUp).
+  struct Jump
+  {
+    uint64_t match = 0;
+    double pace = 1.0;
+    size_t frames_since = SIZE_MAX;  ///< frames decided after it
+  };
+  Jump jumped_ahead_;
+  size_t frames_since_catch_up_ = SIZE_MAX;  ///< frames decided since the last catch-up (catchingUp)
 };
 
 }  // namespace openable

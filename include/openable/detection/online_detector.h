@@ -146,6 +146,8 @@ private:
   bool standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
   /// The input's verification features (options_.verify with a camera), or null (the note says why).
   std::unique_ptr<FrameFeatures> queryFeatures(const FrameInput& input, FrameOutcome& outcome) const;
+  /// The best match's stored info (FrameOutcome::match), looked up by id: storing the query may have evicted it.
+  void lookUpMatch(FrameOutcome& outcome) const;
   /// Verifies the best match against `query` into outcome.verification (verification_ran; when it cannot run,
   /// the note says why).
   void verifyBestMatch(const FrameFeatures* query, FrameOutcome& outcome) const;

@@ -197,6 +197,14 @@ void LoopCsvWriter::setStatus(size_t row, FrameStatus status)
   frames_[row].status = status;
 }
 
+void LoopCsvWriter::setMatch(size_t row, long match)
+{
+  if (row >= frames_.size())
+    throw Error("loop decisions: no row " + std::to_string(row) + " to set (" + std::to_string(frames_.size()) +
+                " rows)");
+  frames_[row].match = match;
+}
+
 void LoopCsvWriter::settlePending()
 {
   for (LoopCsvFrame& f : frames_)

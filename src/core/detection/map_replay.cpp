@@ -26,10 +26,11 @@ std::vector<MapLoop> replayLoops(const SessionMap& map, const Config& config)
       outcome.frame = p;
       outcome.detection = detector.process(query, frames.info(p));
       outcome.status = decision.decide(outcome.detection);
-      detector.setSearching(outcome.status != FrameStatus::Published);
+      detector.setSearching(outcome.status != FrameStatus::Published || decision.catchingUp());
       outcome.score = decision.score(outcome.detection);
       std::vector<FrameOutcome> published =
           confirmation.stored(outcome, decision.joinedBefore(), decision.mayJoinLater());
+      placeInHindsight(published, outcome);
       if (outcome.published())  // confirm_frames 0
         published.push_back(outcome);
       for (const FrameOutcome& o : published)

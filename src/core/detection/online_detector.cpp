@@ -275,17 +275,7 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.query.id = outcome.detection.query_id;
   if (!detector_.localisationMode())
     outcome.query.session = static_cast<uint32_t>(detector_.ownSession());
-  if (outcome.detection.has_candidates)
-  {
-    const PlaceDatabase& frames = detector_.map().frames(outcome.detection.best.session);
-    const uint64_t id = outcome.detection.best.id;
-    // Looked up by id: storing the query may have evicted the oldest frames.
-    if (id >= frames.firstId() && id - frames.firstId() < frames.size())
-    {
-      outcome.has_match_info = true;
-      outcome.match = frames.info(static_cast<size_t>(id - frames.firstId()));
-    }
-  }
+  lookUpMatch(outcome);
   outcome.times.match_ms = millisecondsSince(start);
   start = std::chrono::steady_clock::now();
   std::unique_ptr<FrameFeatures> query = queryFeatures(input, outcome);
@@ -304,7 +294,7 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.score = decision_.score(outcome.detection);
   // The matcher follows the decision's run (what verification does with it comes after): a stream whose loops are
   // only flagged unverified matches as one whose loops are published.
-  detector_.setSearching(outcome.status != FrameStatus::Published);
+  detector_.setSearching(outcome.status != FrameStatus::Published || decision_.catchingUp());
   // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
   // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
   const bool run_start = outcome.status == FrameStatus::Inconsistent && decision_.mayJoinLater();
@@ -326,11 +316,26 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   const bool may_join = decision_.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent ||
                                                      (outcome.status == FrameStatus::NotUnique && !strict));
   std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome, decision_.joinedBefore(), may_join);
+  placeInHindsight(confirmed, outcome);
+  for (FrameOutcome& c : confirmed)
+    if (!c.has_match_info)
+      lookUpMatch(c);
   has_last_stored_ = true;
   last_stored_ = descriptor;
   last_outcome_ = outcome;
   outcome.confirmed = std::move(confirmed);
   return outcome;
+}
+
+void OnlineDetector::lookUpMatch(FrameOutcome& outcome) const
+{
+  if (!outcome.detection.has_candidates)
+    return;
+  const PlaceDatabase& frames = detector_.map().frames(outcome.detection.best.session);
+  const uint64_t id = outcome.detection.best.id;
+  outcome.has_match_info = id >= frames.firstId() && id - frames.firstId() < frames.size();
+  if (outcome.has_match_info)
+    outcome.match = frames.info(static_cast<size_t>(id - frames.firstId()));
 }
 
 std::unique_ptr<FrameFeatures> OnlineDetector::queryFeatures(const FrameInput& input, FrameOutcome& outcome) const
