@@ -483,7 +483,6 @@ TEST(LoopConfirmation, AFeaturelessFrameNeitherJoinsNorEndsWhatIsHeld)
   EXPECT_EQ(confirmed[0].status_before, FrameStatus::Inconsistent);
 }
 
-
 namespace
 {
 FrameOutcome matched(uint64_t query_id, uint64_t match, float pace, int direction = 1)

@@ -170,6 +170,12 @@ private:
   /// kCatchUpPlaces, on a path faster than the line: a path of a faster pace may be taking over from one that lagged
   /// the revisit (followsJump decides on the next frame).
   bool catchesUp(const Detection& detection) const;
+  /// The match follows the published line's route: its direction, in its session.
+  bool alongLine(const Detection& detection) const;
+  /// Where the published line puts this frame's match: extended by its slope over the frames decided since.
+  double lineExtended() const;
+  /// The best path is faster than the published line by more than kFasterPace.
+  bool fasterThanLine(const Detection& detection) const;
   /// The frame after a jump ahead (catchesUp) is on the faster path's line from it: the run has caught up.
   bool followsJump(const Detection& detection) const;
   /// The run resumes as published, on a line of `slope` places a frame through this frame's match

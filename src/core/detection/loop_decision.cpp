@@ -313,11 +313,24 @@ bool LoopDecision::resumesPublishedLine(const Detection& detection, FrameStatus 
     return false;
   const bool unique_enough = why == FrameStatus::Published ||
                              (why == FrameStatus::NotUnique && detection.uniqueness >= options_.continue_uniqueness);
-  if (!unique_enough || detection.best.distance > kContinueSlack * unique_distance_ ||
-      detection.best.direction != line_.direction || detection.best.session != line_.session)
+  if (!unique_enough || detection.best.distance > kContinueSlack * unique_distance_ || !alongLine(detection))
     return false;
-  const double expected = static_cast<double>(line_.match) + line_.slope * static_cast<double>(line_.frames_since + 1);
-  return std::fabs(static_cast<double>(detection.best.id) - expected) <= options_.consistency_tolerance;
+  return std::fabs(static_cast<double>(detection.best.id) - lineExtended()) <= options_.consistency_tolerance;
+}
+
+bool LoopDecision::alongLine(const Detection& detection) const
+{
+  return detection.best.direction == line_.direction && detection.best.session == line_.session;
+}
+
+double LoopDecision::lineExtended() const
+{
+  return static_cast<double>(line_.match) + line_.slope * static_cast<double>(line_.frames_since + 1);
+}
+
+bool LoopDecision::fasterThanLine(const Detection& detection) const
+{
+  return detection.best.pace > line_.slope * line_.direction + kFasterPace;
 }
 
 bool LoopDecision::catchesUp(const Detection& detection) const
@@ -329,23 +342,21 @@ bool LoopDecision::catchesUp(const Detection& detection) const
   // second frame asked for (followsJump), 90 pace streams 44.27 -> 44.84 summed recall at 287 -> 269 wrong loops, 35
   // not tuned on 18.20 -> 18.83 at 234 -> 223 (doc/results.md "A run that catches up"). Only ahead, and only a few
   // places: a match that falls back or leaps is not a path catching up.
-  if (options_.max_pace <= 1 || !published_ || !line_.valid || detection.best.direction != line_.direction ||
-      detection.best.session != line_.session)
+  if (options_.max_pace <= 1 || !published_ || !line_.valid || !alongLine(detection))
     return false;  // (at one pace no faster path can take over)
-  if (detection.best.pace <= line_.slope * line_.direction + kFasterPace)
+  if (!fasterThanLine(detection))
     return false;  // the path that takes over is faster than the run's line
-  const double expected = static_cast<double>(line_.match) + line_.slope * static_cast<double>(line_.frames_since + 1);
-  const double ahead = (static_cast<double>(detection.best.id) - expected) * line_.direction;
+  const double ahead = (static_cast<double>(detection.best.id) - lineExtended()) * line_.direction;
   return ahead > options_.consistency_tolerance && ahead <= kCatchUpPlaces;
 }
 
 bool LoopDecision::followsJump(const Detection& detection) const
 {
-  if (detection.best.direction != line_.direction || detection.best.session != line_.session)
+  if (!alongLine(detection))
     return false;
   const double expected = static_cast<double>(jumped_ahead_.match) + jumped_ahead_.pace * line_.direction;
   return std::fabs(static_cast<double>(detection.best.id) - expected) <= options_.consistency_tolerance &&
-         detection.best.pace > line_.slope * line_.direction + kFasterPace;
+         fasterThanLine(detection);
 }
 
 FrameStatus LoopDecision::resumeRun(const Detection& detection, double slope)
