@@ -88,6 +88,21 @@ TEST(LoopDecision, PublishesOnlyAfterConsistentFramesAdvanceTogether)
   EXPECT_EQ(decision.decide(candidate(93, 0.3f)), FrameStatus::Inconsistent);
 }
 
+TEST(LoopDecision, APublishedFrameCountsItsRunsOwnFramesBeforeIt)
+{
+  // What the confirmation asks to take back what a broken run had reached back to: the run's frames before this one.
+  LoopDecision decision(decisionConfig());
+  decision.decide(candidate(40, 0.3f));
+  EXPECT_EQ(decision.ownFramesBefore(), 0u);  // not published
+  decision.decide(candidate(41, 0.3f));
+  decision.decide(candidate(42, 0.3f));
+  EXPECT_EQ(decision.ownFramesBefore(), 2u);  // 40 and 41
+  decision.decide(candidate(43, 0.3f));
+  EXPECT_EQ(decision.ownFramesBefore(), 3u);
+  decision.decide(candidate(90, 0.3f));
+  EXPECT_EQ(decision.ownFramesBefore(), 0u);  // a new run, not yet consistent
+}
+
 TEST(LoopDecision, AMatchThatStaysPutNeverBecomesConsistent)
 {
   // A "hub" place that every frame matches (a tunnel, a wall): each step of 0 is within the tolerance of

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <deque>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "openable/detection/frame_outcome.h"
@@ -50,7 +51,8 @@ public:
   /// outcomes it confirms, oldest first, each Published (frames 0: the frames that joined it); when the frame is
   /// not Published itself, the run ended and every pending one is dropped, and it is held when it `may_join` a
   /// later run (LoopDecision::mayJoinLater, and whatever else the caller requires of it).
-  std::vector<Outcome> stored(Outcome& outcome, const std::vector<size_t>& joined_before = {}, bool may_join = false)
+  std::vector<Outcome> stored(Outcome& outcome, const std::vector<size_t>& joined_before = {}, bool may_join = false,
+                              size_t own_before = 0)
   {
     std::vector<Outcome> confirmed;
     const uint64_t index = ++stored_;
@@ -68,19 +70,18 @@ public:
       confirm(waiting_.front(), confirmed);
       waiting_.pop_front();
     }
-    // The run's first frames that join it: confirmed with this frame.
-    // Oldest first: the frames furthest back come first.
-    for (auto back = joined_before.rbegin(); back != joined_before.rend(); ++back)
-    {
-      Waiting* found = *back > 0 && *back < index ? heldFrame(index - *back) : nullptr;
-      if (!found)
-        continue;  // not held (it went out, or a frame between them ended what was held)
-      Waiting& w = *found;
-      if (frames_ == 0)
-        confirm(w, confirmed);
-      else
-        waiting_.push_back(std::move(w));
-    }
+    // The run's first frames that join it: confirmed with this frame, oldest first.
+    const std::vector<bool> joins = joining(joined_before, index, own_before);
+    for (size_t i = 0; i < held_.size(); ++i)
+      if (joins[i])
+      {
+        Waiting& w = held_[i];
+        w.joined_by = index;
+        if (frames_ == 0)
+          confirm(w, confirmed);
+        else
+          waiting_.push_back(std::move(w));
+      }
     held_.clear();
     if (frames_ > 0)
     {
@@ -146,16 +147,42 @@ private:
     int confirmations = 0;          ///< stored frames since it that went on with its run
     bool joined = false;            ///< a frame the run reached back to (not Pending, not counted as dropped)
     uint64_t index = 0;             ///< which stored frame it is (stored() calls, from 1): what joinedBefore counts
+    uint64_t joined_by = 0;         ///< the stored frame whose run took it last (its index; 0: none)
+
+    /// A published frame whose run broke before it was confirmed (held again by holdUnconfirmed).
+    bool wasPublished() const
+    {
+      return !outcomes.empty() && outcomes.front().status == FrameStatus::Unconfirmed;
+    }
   };
 
-  /// The held frame `index`, or none. Held frames need not be consecutive: a frame the reach-back passed over
-  /// (or one it did not take) leaves a gap when the ones around it are held again after their run broke.
-  Waiting* heldFrame(uint64_t index)
+  /// Which held frames join the run of stored frame `index` (one flag a held frame): those the decision says
+  /// (`joined_before` back from it), and those that a held published frame among the run's own frames (the
+  /// `own_before` stored frames before it) had taken into its run when it was published. Held frames need not be
+  /// consecutive: a frame the reach-back passed over (or one it did not take) leaves a gap when the ones around it
+  /// are held again after their run broke.
+  /// Why the second: a run published and broken before its confirmation holds its frames again, those it reached
+  /// back to with it. When the run goes on within consistent_frames (its line bent for a frame or two: the frames of
+  /// the new run include the old one's published frames), it is the same run, and what the old one judged on its
+  /// line joins as it would have; the new run's reach-back, on its own line, can end where a lagging sequence's first
+  /// frames lie 2 places off (GP day_right then night_right at a random pace: the frame before a stop of 102 frames,
+  /// place 68 matched as 66, was lost with its repeats). Only then: a run taken by a reach-back alone, ten frames
+  /// and more later, brought 3 places off loops with it at 1.9x and 2.1x.
+  std::vector<bool> joining(const std::vector<size_t>& joined_before, uint64_t index, size_t own_before) const
   {
-    for (auto w = held_.rbegin(); w != held_.rend(); ++w)
-      if (w->index == index)
-        return &*w;
-    return nullptr;
+    std::unordered_set<uint64_t> wanted, takers;
+    for (size_t back : joined_before)
+      if (back > 0 && back < index)
+        wanted.insert(index - back);
+    std::vector<bool> joins(held_.size(), false);
+    for (size_t i = held_.size(); i-- > 0;)  // newest first: a frame's run comes after it
+    {
+      const Waiting& w = held_[i];
+      joins[i] = wanted.count(w.index) > 0 || (w.joined_by > 0 && takers.count(w.joined_by) > 0 && !w.wasPublished());
+      if (joins[i] && w.wasPublished() && w.index + own_before >= index)
+        takers.insert(w.index);
+    }
+    return joins;
   }
 
   void confirm(Waiting& w, std::vector<Outcome>& confirmed)

@@ -97,6 +97,13 @@ public:
   {
     return joined_before_;
   }
+  /// After a Published decision: how many of the stored frames just before this one are its run's own frames (the
+  /// consecutive frames that passed and agree, less this one; at most kMaxJoined). A run that broke and goes on
+  /// within them is the same run (LoopConfirmation takes back what it had reached back to).
+  size_t ownFramesBefore() const
+  {
+    return published_ && run_ > 1 ? std::min<size_t>(static_cast<size_t>(run_ - 1), kMaxJoined) : 0;
+  }
   /// Whether the last decided frame may join a run published later: it was Inconsistent (one of a run's first
   /// frames), or NotUnique with a best match (a revisit whose evidence was still too weak). A caller holds such
   /// frames (LoopConfirmation) until joinedBefore() says which join. Never with run_start_tolerance -1.

@@ -29,7 +29,7 @@ std::vector<MapLoop> replayLoops(const SessionMap& map, const Config& config)
       detector.setSearching(outcome.status != FrameStatus::Published || decision.catchingUp());
       outcome.score = decision.score(outcome.detection);
       std::vector<FrameOutcome> published =
-          confirmation.stored(outcome, decision.joinedBefore(), decision.mayJoinLater());
+          confirmation.stored(outcome, decision.joinedBefore(), decision.mayJoinLater(), decision.ownFramesBefore());
       placeInHindsight(published, outcome);
       if (outcome.published())  // confirm_frames 0
         published.push_back(outcome);

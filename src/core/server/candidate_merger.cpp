@@ -101,7 +101,8 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
   StreamDecision& stream = found->second;
   out.status = stream.decision.decide(d);
   out.score = stream.decision.score(d);
-  out.confirmed = stream.confirmation.stored(out, stream.decision.joinedBefore(), stream.decision.mayJoinLater());
+  out.confirmed = stream.confirmation.stored(out, stream.decision.joinedBefore(), stream.decision.mayJoinLater(),
+                                            stream.decision.ownFramesBefore());
   return out;
 }
 
