@@ -28,7 +28,9 @@ namespace openable
 /// A run's first frames and the frames before it (LoopDecision::joinedBefore): the frames that may join a run
 /// (LoopDecision::mayJoinLater) just before a published one are held with their repeats; the ones the decision
 /// says join the run's loop closure wait with it and are confirmed with it, each with status_before its own
-/// status (Inconsistent, NotUnique, or Standstill for a repeat).
+/// status (Inconsistent, NotUnique, or Standstill for a repeat). A published frame whose run broke before it was
+/// confirmed is held again with the frames it took; a later run that takes it back among its own frames
+/// (LoopDecision::ownFramesBefore) takes those too (joining()).
 ///
 /// Outcome: what a pipeline decides for one frame, with a FrameStatus `status` and `published()`
 /// (FrameOutcome in OnlineDetector and the map replay, MergedOutcome in the place servers' CandidateMerger).
@@ -50,7 +52,8 @@ public:
   /// those not held are passed over. Returns the earlier
   /// outcomes it confirms, oldest first, each Published (frames 0: the frames that joined it); when the frame is
   /// not Published itself, the run ended and every pending one is dropped, and it is held when it `may_join` a
-  /// later run (LoopDecision::mayJoinLater, and whatever else the caller requires of it).
+  /// later run (LoopDecision::mayJoinLater, and whatever else the caller requires of it). `own_before`: how many of
+  /// the stored frames just before it are its run's own (LoopDecision::ownFramesBefore; see joining()).
   std::vector<Outcome> stored(Outcome& outcome, const std::vector<size_t>& joined_before = {}, bool may_join = false,
                               size_t own_before = 0)
   {
