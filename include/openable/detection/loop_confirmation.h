@@ -165,12 +165,12 @@ private:
   /// consecutive: a frame the reach-back passed over (or one it did not take) leaves a gap when the ones around it
   /// are held again after their run broke.
   /// Why the second: a run published and broken before its confirmation holds its frames again, those it reached
-  /// back to with it. When the run goes on within consistent_frames (its line bent for a frame or two: the frames of
-  /// the new run include the old one's published frames), it is the same run, and what the old one judged on its
-  /// line joins as it would have; the new run's reach-back, on its own line, can end where a lagging sequence's first
-  /// frames lie 2 places off (GP day_right then night_right at a random pace: the frame before a stop of 102 frames,
-  /// place 68 matched as 66, was lost with its repeats). Only then: a run taken by a reach-back alone, ten frames
-  /// and more later, brought 3 places off loops with it at 1.9x and 2.1x.
+  /// back to with it. When a later run's own frames include the old one's published frame (its line bent for a frame
+  /// or two), it is the same run, and what the old one judged on its line joins as it would have; the new run's
+  /// reach-back, on its own line, can end where a lagging sequence's first frames lie 2 places off (GP day_right then
+  /// night_right at a random pace: the frame before a stop of 102 frames, place 68 matched as 66, was lost with its
+  /// repeats). Only then: taken by a reach-back alone, ten frames and more later, a broken run brought loops 3 places
+  /// off with it (GP day_right then night_right at 2.1x: 0 -> 3 wrong; doc/results.md "A broken run's reach-back").
   std::vector<bool> joining(const std::vector<size_t>& joined_before, uint64_t index, size_t own_before) const
   {
     std::unordered_set<uint64_t> wanted, takers;

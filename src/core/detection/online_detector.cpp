@@ -315,7 +315,8 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   const bool strict = options_.verify && (config_.verification_veto || options_.verify_required);
   const bool may_join = decision_.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent ||
                                                      (outcome.status == FrameStatus::NotUnique && !strict));
-  std::vector<FrameOutcome> confirmed = confirmation_.stored(outcome, decision_.joinedBefore(), may_join, decision_.ownFramesBefore());
+  std::vector<FrameOutcome> confirmed =
+      confirmation_.stored(outcome, decision_.joinedBefore(), may_join, decision_.ownFramesBefore());
   placeInHindsight(confirmed, outcome);
   for (FrameOutcome& c : confirmed)
     if (!c.has_match_info)
