@@ -300,6 +300,59 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
   }
 }
 
+// Between two of the fast paces followed the best line drifts from the revisit, and its end is placed between it and
+// the neighbouring pace's (refinedColumn): nearer the place the revisit shows than the line's own end.
+TEST(PaceMatcher, PlacesTheEndOfARevisitBetweenTwoFastPacesNearerItsPlace)
+{
+  // Neighbouring places look alike (each is the one before with about 1 bit in 8 flipped), as along a road, so a
+  // line a place or two off the revisit costs little more than the right one.
+  const DescriptorLayout layout = binaryLayout(256);
+  std::mt19937_64 rng(5);
+  PlaceDatabase reference(layout);
+  std::vector<std::vector<uint64_t>> places{openable_test::randomWords(rng, 4)};
+  for (int j = 1; j < 600; ++j)
+  {
+    places.push_back(places.back());
+    for (uint64_t& word : places.back())
+      word ^= rng() & rng() & rng();
+  }
+  for (const auto& place : places)
+    reference.add(place, FrameInfo());
+  const auto errors = [&](double pace, double* line_error, double* refined_error)
+  {
+    PaceMatcher matcher(layout, 20, false, PaceOptions());
+    *line_error = *refined_error = 0.0;
+    int frames = 0;
+    for (int i = 0; 10 + pace * i < 590; ++i)
+    {
+      const int shown = static_cast<int>(10 + pace * i);
+      auto query = places[static_cast<size_t>(shown)];
+      query[1] ^= rng() & rng() & rng();
+      matcher.match(query.data(), reference, reference.size());
+      std::vector<size_t> best;
+      matcher.smallestDistinct(1, 10, 1, best);
+      if (i < 30)
+        continue;  // the revisit's first frames fit any pace
+      ++frames;
+      *line_error += std::fabs(static_cast<double>(best.at(0)) - shown);
+      *refined_error += std::fabs(static_cast<double>(matcher.refinedColumn(best.at(0))) - shown);
+    }
+    *line_error /= frames;
+    *refined_error /= frames;
+  };
+  double line = 0.0, refined = 0.0;
+  errors(2.17, &line, &refined);  // midway between 2.02x and 2.32x
+  EXPECT_LT(refined, line - 0.2) << "2.17x: the line's end " << line << " places off, refined " << refined;
+  RecordProperty("line_error_217", std::to_string(line));
+  RecordProperty("refined_error_217", std::to_string(refined));
+  errors(121.0 / 60.0, &line, &refined);  // on a pace followed
+  EXPECT_LE(refined, line + 0.1) << "on a line: " << line << " places off, refined " << refined;
+  errors(1.1, &line, &refined);  // below 1.65x the end is the line's
+  EXPECT_EQ(refined, line);
+  PaceMatcher empty(layout, 20, false, PaceOptions());
+  EXPECT_EQ(empty.refinedColumn(7), 7u);  // nothing matched yet: the column itself
+}
+
 namespace
 {
 Config decisionAtAnyPace()

@@ -137,6 +137,9 @@ public:
   {
     return static_cast<double>(std::abs(slope.first)) / static_cast<double>(slope.second);
   }
+  /// At a fast (or slow) pace, the end of the best path placed between its pace and the neighbouring one whose
+  /// costs say the revisit lies between them (pace_matcher.cpp); elsewhere `column`.
+  size_t refinedColumn(size_t column) const override;
   size_t smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& columns) const override;
   void setSequenceLength(int sequence_length) override;
   void setBidirectional(bool bidirectional) override;

@@ -32,6 +32,12 @@ public:
     (void)column;
     return 1.0f;
   }
+  /// The column where the revisit whose best sequence ends in `column` most likely is now: `column` itself, unless
+  /// the matcher can place the end of a sequence between the paces it follows (PaceMatcher).
+  virtual size_t refinedColumn(size_t column) const
+  {
+    return column;
+  }
   /// The standard deviation of the last query's frame distances over the row's columns (normalised as
   /// normalized() is), or NaN where the matcher does not keep it (SequenceMatcher): how far apart places
   /// that are not the query usually are, the unit of Detection::relief.

@@ -149,7 +149,20 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   if (picks.size() > wanted)
     picks.resize(wanted);
   for (size_t i = 0; i < picks.size() && i < static_cast<size_t>(options_.top_k); ++i)
-    detection.top.push_back(candidateAt(map, picks[i].session, picks[i].column));
+  {
+    // Each path's end placed between the paces followed (its distance and pace stay the path's): each candidate is
+    // its own session's, so place servers that split the sessions report what one server would.
+    Candidate c = candidateAt(map, picks[i].session, picks[i].column);
+    const size_t refined = matchers_[picks[i].session]->refinedColumn(picks[i].column);
+    if (refined != picks[i].column)
+    {
+      const Candidate path = c;
+      c = candidateAt(map, picks[i].session, refined);
+      c.distance = path.distance;
+      c.pace = path.pace;
+    }
+    detection.top.push_back(c);
+  }
 
   // No candidate although the stream's own past exists and nothing else is in the map: the exclusion.
   const size_t other_frames = detection.own_excluded
