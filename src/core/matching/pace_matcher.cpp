@@ -380,9 +380,10 @@ size_t PaceMatcher::refinedColumn(size_t column) const
   // places ahead of GP day_right then day_left at 2.2x for 20 frames, published as wrong loops (tolerance 2), while
   // the slower neighbour's line ended as far behind. As a sub-pixel peak is found, a parabola through the three
   // paces' costs (each neighbour's smallest within kRefineReach places) places the revisit's pace between them, and
-  // the end moves that fraction (at most half) of the way to the neighbour's end. Measured (doc/results.md, "The end
-  // of a path placed between the paces followed"): 90 pace streams 45.53 -> 46.59 summed recall at 271 -> 253 wrong,
-  // every steady pace 1.0x to 2.9x 43.15 -> 44.01 at 185 -> 165, 35 streams not tuned on 18.84 -> 18.98 at 223 -> 226.
+  // the end moves that fraction (at most half) of the way to the neighbour's end. Measured (doc/results.md, "The
+  // end of a fast path placed between the paces followed"): 90 pace streams 45.53 -> 46.59 summed recall at 271 ->
+  // 253 wrong, every steady pace 1.0x to 2.9x 43.15 -> 44.01 at 185 -> 165, 35 streams not tuned on 18.84 -> 18.98
+  // at 223 -> 226.
   // From 1.65x only: from 1.22x, a borderline match before a stop moved one place and was repeated through it (119
   // wrong loops on one stream not tuned on, 7 before), and at 1.5x, on a line, the parabola's noise broke runs.
   if (column >= columns_)
