@@ -6,6 +6,7 @@
 #include <string>
 
 #include "openable/error.h"
+#include "openable/parabola.h"
 #include "pace_kernels.h"
 
 namespace openable
@@ -389,8 +390,8 @@ size_t PaceMatcher::refinedColumn(size_t column) const
   if (column >= columns_)
     return column;
   const size_t v = paceIndex(column);
-  const bool forward = slopes_[v].first > 0 && v > 0 && v + 1 < slopes_.size() && slopes_[v + 1].first > 0;
-  if (!forward || std::fabs(std::log(placesPerFrame(slopes_[v]))) < std::log(kRefinedPace))
+  const bool has_neighbours = slopes_[v].first > 0 && v > 0 && v + 1 < slopes_.size() && slopes_[v + 1].first > 0;
+  if (!has_neighbours || std::fabs(std::log(placesPerFrame(slopes_[v]))) < std::log(kRefinedPace))
     return column;
   const auto smallestNear = [&](size_t pace, long* at)
   {
@@ -411,11 +412,8 @@ size_t PaceMatcher::refinedColumn(size_t column) const
   };
   long slower_end = static_cast<long>(column), faster_end = static_cast<long>(column);
   const double slower = smallestNear(v - 1, &slower_end), faster = smallestNear(v + 1, &faster_end);
-  const double own = costAt(column, v);
-  const double curvature = slower - 2.0 * own + faster;
-  if (!(curvature > 0.0))
-    return column;  // no minimum between the neighbours
-  const double offset = std::clamp(0.5 * (slower - faster) / curvature, -0.5, 0.5);  // in paces, + faster
+  // In paces, + faster; 0 (the line's own end) where the three costs have no minimum between the neighbours.
+  const double offset = std::clamp(parabolaMinimum(slower, costAt(column, v), faster), -0.5, 0.5);
   const long toward = offset > 0.0 ? faster_end : slower_end;
   const double place =
       static_cast<double>(column) + std::fabs(offset) * static_cast<double>(toward - static_cast<long>(column));

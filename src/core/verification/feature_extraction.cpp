@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "openable/error.h"
+#include "openable/parabola.h"
 #include "openable/verification/geometric_verifier.h"
 
 namespace openable
@@ -150,10 +151,7 @@ void GeometricVerifier::stereoDepth(const cv::Mat& left_grey, const cv::Mat& rig
       const int k = static_cast<int>(min_it - cost.begin());
       if (k > 0 && k + 1 < static_cast<int>(cost.size()))
       {
-        const double c0 = cost[k - 1], c1 = cost[k], c2 = cost[k + 1];
-        const double denom = c0 - 2.0 * c1 + c2;
-        const double offset = denom > 0.0 ? 0.5 * (c0 - c2) / denom : 0.0;
-        const double xr = xr0 + (k - kSearch - 1) + offset;
+        const double xr = xr0 + (k - kSearch - 1) + parabolaMinimum(cost[k - 1], cost[k], cost[k + 1]);
         disparity = xl - xr;
       }
       else
