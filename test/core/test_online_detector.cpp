@@ -328,6 +328,39 @@ TEST(OnlineDetector, NoLoopAmongLookAlikePlacesNordlandSummerThenWinter)
     }
 }
 
+// A configuration made for larger images on a small camera: gardens_point.yaml's patch of 128 on Nordland's 64x32
+// frames. Each frame is described at its own size (Preprocessor: a cell smaller than the patch both ways is not
+// enlarged into blocks), so the stream publishes what the same configuration at patch 64 publishes, frame by frame.
+// Measured with scripts/pace_eval.py (doc/results.md): 795 published, 31 wrong, recall 0.424 when the frames were
+// enlarged to 128; 1,416 published, 8 wrong (precision 0.994), recall 0.782 at their own size.
+TEST(OnlineDetector, ASmallCameraIsDescribedAtItsOwnSizeNordlandWithTheGardensPointConfiguration)
+{
+  std::vector<cv::Mat> frames;
+  for (const char* season : {"summer", "winter"})
+    for (int i = 0; i < 1800; ++i)
+      frames.push_back(nordland(season, i));
+  const Config large = shipped("gardens_point");
+  ASSERT_EQ(large.patch_size, 128);
+  Config own = large;
+  own.patch_size = 64;
+  const auto at_large = runStream(frames, large), at_own = runStream(frames, own);
+  ASSERT_EQ(at_large.size(), at_own.size());
+  for (size_t t = 0; t < at_large.size(); ++t)
+  {
+    ASSERT_EQ(at_large[t].status, at_own[t].status) << t;
+    if (at_large[t].published())
+    {
+      ASSERT_EQ(at_large[t].detection.best.id, at_own[t].detection.best.id) << t;
+    }
+  }
+  const Scored scored = scoreByFrame(at_large, 1800, 1);
+  RecordProperty("nordland_gardens_point_published", std::to_string(scored.published));
+  RecordProperty("nordland_gardens_point_precision", std::to_string(scored.precision));
+  RecordProperty("nordland_gardens_point_recall", std::to_string(scored.recall));
+  EXPECT_GE(scored.precision, 0.99) << scored.wrong << " wrong of " << scored.published;
+  EXPECT_GE(scored.recall, 0.75);
+}
+
 TEST(OnlineDetector, ARobotStandingStillClosesNoLoop)
 {
   const std::vector<cv::Mat> still(300, openable_test::gardensPoint("day_right", 10));

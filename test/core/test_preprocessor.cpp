@@ -126,6 +126,61 @@ TEST(Preprocessor, GridAndPanoramaCellLayout)
   EXPECT_THROW(Preprocessor(c).patches(cv::Mat(20, 3, CV_8UC1)), Error);
 }
 
+TEST(Preprocessor, ACellSmallerThanThePatchAlongBothAxesIsDescribedAtItsOwnSize)
+{
+  Config c;
+  c.descriptor = "HOG-B";
+  c.patch_size = 128;
+  const auto side = [](const Config& config, int cols, int rows)
+  { return Preprocessor(config).patches(cv::Mat(rows, cols, CV_8UC1, cv::Scalar(90)))[0].intensity.size(); };
+  // Nordland's 64x32 frames, and any cell smaller than the patch both ways: the cell's longer side.
+  EXPECT_EQ(side(c, 64, 32), cv::Size(64, 64));
+  EXPECT_EQ(side(c, 100, 20), cv::Size(100, 100));
+  // As large as the patch along one axis: the patch (the other axis enlarged, as always).
+  EXPECT_EQ(side(c, 128, 20), cv::Size(128, 128));
+  EXPECT_EQ(side(c, 960, 540), cv::Size(128, 128));
+  // Never below the descriptor's smallest patch (HOG-B 8, LDB 10).
+  EXPECT_EQ(side(c, 6, 4), cv::Size(8, 8));
+  c.descriptor = "LDB";
+  EXPECT_EQ(side(c, 6, 4), cv::Size(10, 10));
+  // Every configuration's patch of 64 on Nordland's frames: enlarged along one axis only, as before.
+  c.descriptor = "HOG-B";
+  c.patch_size = 64;
+  EXPECT_EQ(side(c, 64, 32), cv::Size(64, 64));
+  // Grid cells and sub-panoramas are cells: each one's own size.
+  c.description_type = "grid";
+  c.grid_x = c.grid_y = 2;
+  const auto cells = Preprocessor(c).patches(cv::Mat(60, 100, CV_8UC1, cv::Scalar(90)));
+  ASSERT_EQ(cells.size(), 4u);
+  for (const Patch& cell : cells)
+    EXPECT_EQ(cell.intensity.size(), cv::Size(50, 50));
+  c.description_type = "global";
+  c.grid_x = c.grid_y = 1;
+  c.camera_type = "panoramic";
+  c.panoramas = 6;
+  const auto subs = Preprocessor(c).patches(cv::Mat(50, 300, CV_8UC1, cv::Scalar(90)));
+  ASSERT_EQ(subs.size(), 6u);
+  for (const Patch& sub : subs)
+    EXPECT_EQ(sub.intensity.size(), cv::Size(50, 50));
+}
+
+TEST(Preprocessor, ARealSmallFrameGivesThePatchOfItsOwnSizeAtALargerPatch)
+{
+  // A Nordland frame (64x32) at gardens_point.yaml's patch of 128: the same floats as at 64, the size its pixels
+  // fill, not a patch of 128 whose 2x4 blocks each repeat one pixel.
+  const cv::Mat frame = cv::imread(openable_test::sharedData("nordland/summer/images-00500.png"), cv::IMREAD_COLOR);
+  ASSERT_EQ(frame.size(), cv::Size(64, 32));
+  Config c;
+  c.descriptor = "HOG-B";
+  c.patch_size = 128;
+  const auto large = Preprocessor(c).patches(frame);
+  c.patch_size = 64;
+  const auto own = Preprocessor(c).patches(frame);
+  ASSERT_EQ(large.size(), 1u);
+  ASSERT_EQ(large[0].intensity.size(), own[0].intensity.size());
+  EXPECT_EQ(cv::norm(large[0].intensity, own[0].intensity, cv::NORM_INF), 0.0);
+}
+
 TEST(Preprocessor, MultiCameraRingGivesOneSubPanoramaPerCamera)
 {
   Config c;

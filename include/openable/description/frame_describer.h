@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -49,7 +51,8 @@ public:
     return *row_;
   }
 
-  /// Describes patches as returned by the preprocessor (exactly layout().cells of them).
+  /// Describes patches as returned by the preprocessor (exactly layout().cells of them, of one side: patch_size, or
+  /// a small image's own, Preprocessor; the extractor for that side is built once, when first needed).
   FrameDescriptor describe(const std::vector<Patch>& patches) const;
   void describe(const std::vector<Patch>& patches, uint64_t* out) const;
 
@@ -62,6 +65,15 @@ private:
   const DescriptorInfo* row_;
   DescriptorLayout layout_;
   std::unique_ptr<DescriptorExtractor> extractor_;
+  /// The extractor for patches of `side` pixels: extractor_ at patch_size, else one of smaller_.
+  const DescriptorExtractor& extractorFor(int side) const;
+  /// Extractors for the smaller patches of small images, by side; behind a pointer so the describer stays movable.
+  struct SmallerExtractors
+  {
+    std::mutex mutex;
+    std::map<int, std::unique_ptr<DescriptorExtractor>> by_side;
+  };
+  std::unique_ptr<SmallerExtractors> smaller_ = std::make_unique<SmallerExtractors>();
 };
 
 }  // namespace openable

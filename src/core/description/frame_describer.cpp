@@ -63,17 +63,18 @@ void FrameDescriber::describe(const std::vector<Patch>& patches, uint64_t* out) 
     throw Error("got " + std::to_string(patches.size()) + " patches; the configuration describes " +
                 std::to_string(layout_.cells) + " cells per frame");
   std::memset(out, 0, sizeof(uint64_t) * layout_.frameWords());
+  const DescriptorExtractor& extractor = extractorFor(patches.empty() ? config_.patch_size : patches[0].intensity.cols);
   std::vector<float> values;
   for (int i = 0; i < layout_.cells; ++i)
   {
     uint64_t* cell = out + i * layout_.cell_words;
     if (layout_.binary)
     {
-      extractor_->describeBinary(patches[i], cell);
+      extractor.describeBinary(patches[i], cell);
       continue;
     }
     values.assign(layout_.cell_words * 2, 0.0f);
-    extractor_->describeFloat(patches[i], values.data());
+    extractor.describeFloat(patches[i], values.data());
     // Unit length: L2 distances then lie in [0, 2] whatever the descriptor's own scale, so they can be
     // normalised and summed like Hamming distances. An all-zero vector (a flat patch) stays zero.
     double norm = 0.0;
@@ -85,6 +86,21 @@ void FrameDescriber::describe(const std::vector<Patch>& patches, uint64_t* out) 
         v = static_cast<float>(v / norm);
     std::memcpy(cell, values.data(), sizeof(float) * values.size());
   }
+}
+
+const DescriptorExtractor& FrameDescriber::extractorFor(int side) const
+{
+  if (side == config_.patch_size)
+    return *extractor_;
+  // A patch is never larger than the configuration's, and the preprocessor keeps it at least the descriptor's
+  // smallest; a side outside that did not come from the preprocessor: the extractor refuses its patches by name.
+  if (side > config_.patch_size || side < row_->min_patch_size)
+    return *extractor_;
+  std::lock_guard<std::mutex> lock(smaller_->mutex);
+  std::unique_ptr<DescriptorExtractor>& extractor = smaller_->by_side[side];
+  if (!extractor)
+    extractor = row_->create(side);
+  return *extractor;
 }
 
 FrameDescriptor FrameDescriber::describeImage(const cv::Mat& image) const

@@ -1,9 +1,11 @@
 #include "openable/description/preprocessor.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
 #include "openable/description/area_downsample.h"
+#include "openable/descriptors/descriptor_registry.h"
 #include "openable/error.h"
 
 namespace openable
@@ -89,7 +91,15 @@ PreprocessOptions PreprocessOptions::from(const Config& config)
   o.patch_normalization = config.patch_normalization;
   o.illumination_invariance = config.illumination_invariance;
   o.alpha = config.alpha;
+  if (const DescriptorInfo* row = findDescriptor(config.descriptor))
+    o.min_patch_size = row->min_patch_size;
   return o;
+}
+
+int PreprocessOptions::patchSide(cv::Size image) const
+{
+  const int longer = std::max(image.width / std::max(1, cellsAcross()), image.height / std::max(1, cellsDown()));
+  return longer >= patch_size ? patch_size : std::min(patch_size, std::max(longer, min_patch_size));
 }
 
 int PreprocessOptions::cellsAcross() const
@@ -148,14 +158,14 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
   // decimation of the 8-bit image first, one pass over its bytes, converting to grey as it goes; then the
   // per-pixel work (logarithms) on the few pixels left, and the small area step to the patch size on one
   // channel.
-  const int p = options_.patch_size;
+  const int p = options_.patchSide(image.size());
   const cv::Size target(across * p, down * p);
   cv::Mat small = options_.illumination_invariance
                       ? illuminationInvariant(decimateTowards(image, target), options_.alpha)
                       : toOneChannel(decimateGreyTowards(image, target), false, options_.alpha);
   if (small.size() != target)
     small = areaResize(small, target);
-  return split(normalizeBlocks(small, options_.patch_normalization), cv::Mat(), across);
+  return split(normalizeBlocks(small, options_.patch_normalization), cv::Mat(), across, p);
 }
 
 std::vector<Patch> Preprocessor::patchesFromCameras(const std::vector<cv::Mat>& images) const
@@ -189,7 +199,7 @@ std::vector<Patch> Preprocessor::patchesWithDisparity(const cv::Mat& left, const
     throw Error("disparity of " + describeMat(disparity) + " does not match the left image " + describeMat(left));
   const int across = cellsAcross();
   const int down = cellsDown();
-  const int p = options_.patch_size;
+  const int p = options_.patchSide(left.size());
   const cv::Size target(across * p, down * p);
 
   const cv::Mat small = areaDownsample(left, target);
@@ -219,17 +229,16 @@ std::vector<Patch> Preprocessor::patchesWithDisparity(const cv::Mat& left, const
         mask_small.at<uint8_t>(y, x) = 255;
       }
     }
-  std::vector<Patch> out = split(intensity, disp_small, across);
+  std::vector<Patch> out = split(intensity, disp_small, across, p);
   // Masks follow the same cell layout.
-  const std::vector<Patch> masks = split(mask_small, cv::Mat(), across);
+  const std::vector<Patch> masks = split(mask_small, cv::Mat(), across, p);
   for (size_t i = 0; i < out.size(); ++i)
     out[i].valid = masks[i].intensity;
   return out;
 }
 
-std::vector<Patch> Preprocessor::split(const cv::Mat& intensity, const cv::Mat& disparity, int across) const
+std::vector<Patch> Preprocessor::split(const cv::Mat& intensity, const cv::Mat& disparity, int across, int p) const
 {
-  const int p = options_.patch_size;
   const int down = cellsDown();
   const int grid_x = options_.description == DescriptionType::Grid ? options_.grid_x : 1;
   const int blocks = across / grid_x;
