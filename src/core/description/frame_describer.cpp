@@ -90,11 +90,9 @@ void FrameDescriber::describe(const std::vector<Patch>& patches, uint64_t* out) 
 
 const DescriptorExtractor& FrameDescriber::extractorFor(int side) const
 {
-  if (side == config_.patch_size)
-    return *extractor_;
-  // A patch is never larger than the configuration's, and the preprocessor keeps it at least the descriptor's
-  // smallest; a side outside that did not come from the preprocessor: the extractor refuses its patches by name.
-  if (side > config_.patch_size || side < row_->min_patch_size)
+  // A smaller side comes from a small image (Preprocessor), never below the descriptor's smallest patch. Any other
+  // side is the configured extractor's, which refuses a patch that is not its size, naming both.
+  if (side >= config_.patch_size || side < row_->min_patch_size)
     return *extractor_;
   std::lock_guard<std::mutex> lock(smaller_->mutex);
   std::unique_ptr<DescriptorExtractor>& extractor = smaller_->by_side[side];
