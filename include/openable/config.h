@@ -94,6 +94,10 @@ struct Config
                                 ///< pass's pays to be a place's best (a fraction of pace_penalty; less nearer 1x)
   double standstill_distance = 0.002;  ///< a frame this close (normalised) to the last stored one is the camera
                                      ///< standing still: not stored, not matched (0 = off)
+  double stop_distance = 0.025;  ///< a frame this close (normalised) to the first frame of a still stretch, or to the
+                                ///< last stored one, is within a still camera's noise (0 = off)
+  int stop_frames = 25;          ///< after this many such frames in a row, the next ones are a stop: not stored, not
+                                ///< matched, no loop closure (a real camera at a red light)
 
   // Loop-closure decision (OnlineDetector): what must hold, besides the gates above, before a loop is published.
   int min_candidates = 21;         ///< fewer candidate places: "too early" (2 x uniqueness_window + 1 places)

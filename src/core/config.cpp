@@ -247,6 +247,7 @@ Config Config::paper()
   c.slip_penalty = 0.0;
   c.pace_prior = 0.0;
   c.standstill_distance = 0.0;
+  c.stop_distance = 0.0;
   c.consistent_frames = 4;
   c.min_candidates = 60;
   c.min_loop_sequence_length = 0;

@@ -165,6 +165,15 @@ const std::vector<KeyAccess>& table()
               "a frame closer than this (normalised distance) to the last stored frame is the camera standing still: "
               "not stored, not matched, it repeats the last decision (0 = off)",
               &Config::standstill_distance).range(0, 1).live(),
+      makeKey("stop_distance",
+              "a frame closer than this (normalised distance) to the first frame of a still stretch, or to the last "
+              "stored frame, is within a still camera's noise; after stop_frames such frames in a row the camera has "
+              "stopped: not stored, not matched, no loop closure (0 = off)",
+              &Config::stop_distance).range(0, 1).live(),
+      makeKey("stop_frames",
+              "frames in a row within stop_distance that are still stored and matched before the camera counts as "
+              "stopped (a slow camera in a featureless scene moves that long)",
+              &Config::stop_frames).range(0, 100000).live(),
       makeKey("min_candidates",
               "loop-closure decision: fewer candidate places than this is 'too early' (21 = 2 x uniqueness_window + 1: "
               "a best match has a rival outside the window unless it is the middle one)",

@@ -2,11 +2,13 @@
 // streams that must publish nothing, keyframes, time jumps, verification policy and map refusal.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <tuple>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "openable/error.h"
@@ -364,11 +366,12 @@ TEST(OnlineDetector, ASmallCameraIsDescribedAtItsOwnSizeNordlandWithTheGardensPo
 TEST(OnlineDetector, ARobotStandingStillClosesNoLoop)
 {
   const std::vector<cv::Mat> still(300, openable_test::gardensPoint("day_right", 10));
-  // With standstill detection (the default), the repeated image is one place; without it, the matcher and
-  // the decision must still refuse a loop of the stop with itself: every stored place looks like every other
-  // (featureless, min_relief).
+  // With standstill detection (the default), the repeated image is one place; without it (neither the exact
+  // repeat nor a still camera's noise), the matcher and the decision must still refuse a loop of the stop with
+  // itself: every stored place looks like every other (featureless, min_relief).
   Config without = shipped("default");
   without.standstill_distance = 0.0;
+  without.stop_distance = 0.0;
   for (const Config& config : {shipped("default"), without})
   {
     const auto outcomes = runStream(still, config);
@@ -382,6 +385,76 @@ TEST(OnlineDetector, ARobotStandingStillClosesNoLoop)
             << t;
       }
     }
+  }
+}
+
+/// The 40 frames of EuRoC V1_01's start (cam0, 20 Hz): the MAV on the ground, a real still camera with its sensor's
+/// noise (consecutive frames 2 bits of HOG-B apart, none the same image as the one before).
+std::vector<cv::Mat> eurocStillFrames()
+{
+  const std::string folder = openable_test::sharedData("stereo/euroc_v101_micro/cam0/data");
+  std::vector<cv::String> names;
+  cv::glob(folder + "/*.png", names);
+  std::sort(names.begin(), names.end());
+  std::vector<cv::Mat> frames;
+  for (const cv::String& name : names)
+    frames.push_back(cv::imread(name, cv::IMREAD_GRAYSCALE));
+  return frames;
+}
+
+size_t storedFrames(const std::vector<FrameOutcome>& outcomes)
+{
+  return static_cast<size_t>(std::count_if(outcomes.begin(), outcomes.end(), [](const FrameOutcome& o) { return o.stored; }));
+}
+
+TEST(OnlineDetector, ARealCameraStandingStillStopsAddingPlacesAfterStopFrames)
+{
+  const std::vector<cv::Mat> still = eurocStillFrames();
+  ASSERT_EQ(still.size(), 40u);
+  // Cycled, the 40 real frames are a stop of 400 frames (20 s): its noise, not one image repeated.
+  std::vector<cv::Mat> stop;
+  for (int k = 0; k < 10; ++k)
+    stop.insert(stop.end(), still.begin(), still.end());
+  const Config config = shipped("default");
+  ASSERT_GT(config.stop_distance, 0.0);
+  const auto outcomes = runStream(stop, config);
+  const size_t stored = storedFrames(outcomes);
+  RecordProperty("euroc_still_frames", std::to_string(stop.size()));
+  RecordProperty("euroc_still_stored", std::to_string(stored));
+  // The first frame, stop_frames within its noise, and a frame or two whose noise strays past stop_distance.
+  EXPECT_LE(stored, static_cast<size_t>(config.stop_frames) + 3);
+  for (size_t t = 0; t < outcomes.size(); ++t)
+  {
+    EXPECT_FALSE(outcomes[t].published()) << t;
+    if (!outcomes[t].stored)
+    {
+      EXPECT_EQ(outcomes[t].status, FrameStatus::Standstill) << t;
+    }
+  }
+  // Without the rule, only an identical image is a standstill: nearly every noisy frame became a place.
+  Config exact_only = config;
+  exact_only.stop_distance = 0.0;
+  const size_t stored_exact = storedFrames(runStream(stop, exact_only));
+  RecordProperty("euroc_still_stored_exact_only", std::to_string(stored_exact));
+  EXPECT_GT(stored_exact, stop.size() * 3 / 4);
+}
+
+TEST(OnlineDetector, AMovingCameraIsNeverTakenForAStop)
+{
+  // Consecutive frames of a moving camera are further apart than a still camera's noise: Gardens Point at a frame a
+  // metre, KITTI 07 at 10 Hz (a car). Every frame is stored.
+  std::vector<cv::Mat> kitti;
+  for (int i = 0; i < 160; ++i)
+  {
+    char name[64];
+    std::snprintf(name, sizeof(name), "kitti/07_first160/image_0/%06d.png", i);
+    kitti.push_back(cv::imread(openable_test::sharedData(name), cv::IMREAD_GRAYSCALE));
+  }
+  const std::vector<const std::vector<cv::Mat>*> streams = {&gardensPointStream("day_right", "night_right"), &kitti};
+  for (const std::vector<cv::Mat>* frames : streams)
+  {
+    const auto outcomes = runStream(*frames, shipped("default"));
+    EXPECT_EQ(storedFrames(outcomes), frames->size());
   }
 }
 

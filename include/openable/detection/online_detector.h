@@ -144,6 +144,11 @@ private:
   /// The camera stands still: the frame is textured and its descriptor within standstill_distance of the last
   /// stored frame's (a textureless frame, e.g. a tunnel, says nothing about motion and is matched as usual).
   bool standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
+  /// The frame is textured and within stop_distance of the still stretch's first frame or of the last stored
+  /// frame: no more than a still camera's noise (a real sensor flips a few bits a frame; standsStill sees none).
+  bool withinStillNoise(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
+  /// The distance between two descriptors, normalised to [0, 1].
+  double normalizedDistance(const FrameDescriptor& a, const FrameDescriptor& b) const;
   /// The input's verification features (options_.verify with a camera), or null (the note says why).
   std::unique_ptr<FrameFeatures> queryFeatures(const FrameInput& input, FrameOutcome& outcome) const;
   /// The best match's stored info (FrameOutcome::match), looked up by id: storing the query may have evicted it.
@@ -162,6 +167,11 @@ private:
   bool has_last_stored_ = false;
   FrameDescriptor last_stored_;  ///< the last stored frame's descriptor (standstill)
   FrameOutcome last_outcome_;    ///< and its outcome: a frame standing still repeats it
+  FrameDescriptor still_anchor_;  ///< the last stored frame that was not within a still camera's noise (stop_distance)
+  int still_frames_ = 0;          ///< stored frames in a row since still_anchor_ within that noise
+  int frames_out_of_noise_ = 0;   ///< frames in a row out of that noise while stopped
+  /// Frames in a row out of a still camera's noise that end a stop (the first may be a stray frame of the noise).
+  static constexpr int kFramesThatEndAStop = 2;
   uint64_t frames_ = 0;          ///< frames given to process(): the next outcome's `frame`
   std::unique_ptr<GeometricVerifier> verifier_;
   FeatureStore features_;
