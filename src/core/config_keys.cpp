@@ -173,7 +173,7 @@ const std::vector<KeyAccess>& table()
       makeKey("stop_frames",
               "frames in a row within stop_distance that are still stored and matched before the camera counts as "
               "stopped (a slow camera in a featureless scene moves that long)",
-              &Config::stop_frames).range(0, 100000).live(),
+              &Config::stop_frames).range(1, 100000).live(),
       makeKey("min_candidates",
               "loop-closure decision: fewer candidate places than this is 'too early' (21 = 2 x uniqueness_window + 1: "
               "a best match has a rival outside the window unless it is the middle one)",

@@ -437,6 +437,10 @@ TEST(OnlineDetector, ARealCameraStandingStillStopsAddingPlacesAfterStopFrames)
   const size_t stored_exact = storedFrames(runStream(stop, exact_only));
   RecordProperty("euroc_still_stored_exact_only", std::to_string(stored_exact));
   EXPECT_GT(stored_exact, stop.size() * 3 / 4);
+  // A stop needs at least one stored frame within the noise to be told from a moving camera.
+  Config at_once = config;
+  at_once.stop_frames = 0;
+  EXPECT_THROW(at_once.validateOrThrow(), Error);
 }
 
 TEST(OnlineDetector, AMovingCameraIsNeverTakenForAStop)
