@@ -8,11 +8,11 @@
 #include <cstdlib>
 #include <map>
 #include <tuple>
-#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "openable/error.h"
 #include "openable/detection/online_detector.h"
+#include "openable/io/image_source.h"
 #include "openable/verification/camera_calibration.h"
 #include "test_util.h"
 
@@ -392,19 +392,19 @@ TEST(OnlineDetector, ARobotStandingStillClosesNoLoop)
 /// noise (consecutive frames 2 bits of HOG-B apart, none the same image as the one before).
 std::vector<cv::Mat> eurocStillFrames()
 {
-  const std::string folder = openable_test::sharedData("stereo/euroc_v101_micro/cam0/data");
-  std::vector<cv::String> names;
-  cv::glob(folder + "/*.png", names);
-  std::sort(names.begin(), names.end());
+  ImageSource source(openable_test::sharedData("stereo/euroc_v101_micro/cam0/data"));  // as openable_offline reads it
   std::vector<cv::Mat> frames;
-  for (const cv::String& name : names)
-    frames.push_back(cv::imread(name, cv::IMREAD_GRAYSCALE));
+  cv::Mat image;
+  std::string name;
+  while (source.next(image, name))
+    frames.push_back(image.clone());
   return frames;
 }
 
 size_t storedFrames(const std::vector<FrameOutcome>& outcomes)
 {
-  return static_cast<size_t>(std::count_if(outcomes.begin(), outcomes.end(), [](const FrameOutcome& o) { return o.stored; }));
+  return static_cast<size_t>(
+      std::count_if(outcomes.begin(), outcomes.end(), [](const FrameOutcome& o) { return o.stored; }));
 }
 
 TEST(OnlineDetector, ARealCameraStandingStillStopsAddingPlacesAfterStopFrames)

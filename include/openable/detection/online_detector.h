@@ -141,14 +141,16 @@ private:
   /// patches() of a frame that may become a place: refuses a constant frame (FrameRefused).
   std::vector<Patch> placePatches(const FrameInput& input) const;
   bool isKeyframe(const FrameInput& input);
-  /// The camera stands still: the frame is textured and its descriptor within standstill_distance of the last
-  /// stored frame's (a textureless frame, e.g. a tunnel, says nothing about motion and is matched as usual).
-  bool standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
-  /// The frame is textured and within stop_distance of the still stretch's first frame or of the last stored
-  /// frame: no more than a still camera's noise (a real sensor flips a few bits a frame; standsStill sees none).
-  bool withinStillNoise(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
-  /// The distance between two descriptors, normalised to [0, 1].
-  double normalizedDistance(const FrameDescriptor& a, const FrameDescriptor& b) const;
+  /// How still the camera is, judged on a textured frame (a textureless one, e.g. a tunnel, says nothing about
+  /// motion and is Moving): Repeated within standstill_distance of the last stored frame, WithinNoise within
+  /// stop_distance of it or of the still stretch's first frame (a real sensor flips a few bits a frame).
+  enum class Stillness
+  {
+    Moving,
+    WithinNoise,
+    Repeated
+  };
+  Stillness stillness(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
   /// The input's verification features (options_.verify with a camera), or null (the note says why).
   std::unique_ptr<FrameFeatures> queryFeatures(const FrameInput& input, FrameOutcome& outcome) const;
   /// The best match's stored info (FrameOutcome::match), looked up by id: storing the query may have evicted it.

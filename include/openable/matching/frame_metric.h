@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 
@@ -21,6 +22,11 @@ public:
     return layout_;
   }
   uint32_t distance(const uint64_t* a, const uint64_t* b, int* shift = nullptr) const;
+  /// distance() as a fraction of the largest possible one: 0 = identical, 1 = every bit (or unit vector) apart.
+  double normalizedDistance(const uint64_t* a, const uint64_t* b) const
+  {
+    return static_cast<double>(distance(a, b)) / static_cast<double>(std::max<uint64_t>(1, layout_.maxFrameDistance()));
+  }
   /// out[i] = distance(query, rows + i * frameWords()) for i < count.
   void row(const uint64_t* query, const uint64_t* rows, size_t count, uint32_t* out) const;
   /// out[i] = distance(qa, rows_a + i * frameWords()) - distance(qb, rows_b + i * frameWords()) for i < count,

@@ -194,12 +194,11 @@ float MapMatcher::reliefAround(const SessionMap& map, const Candidate& best) con
   const uint64_t window = static_cast<uint64_t>(std::max(0, options_.uniqueness_window));
   const uint64_t first = std::max({frames.firstId(), matcher.firstId(), best.id > window ? best.id - window : 0});
   const uint64_t last = std::min(best.id + window, matcher.firstId() + matcher.columns() - 1);
-  const double scale = static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
   double lowest = 1.0, highest = 0.0;
   for (uint64_t id = first; id <= last && id - frames.firstId() < frames.size(); ++id)
   {
     const uint64_t* place = frames.descriptor(static_cast<size_t>(id - frames.firstId()));
-    const double d = metric_.distance(last_query_.data(), place) / scale;
+    const double d = metric_.normalizedDistance(last_query_.data(), place);
     lowest = std::min(lowest, d);
     highest = std::max(highest, d);
   }

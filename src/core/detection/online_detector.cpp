@@ -180,36 +180,30 @@ bool OnlineDetector::isKeyframe(const FrameInput& input)
   return moved;
 }
 
-double OnlineDetector::normalizedDistance(const FrameDescriptor& a, const FrameDescriptor& b) const
+OnlineDetector::Stillness OnlineDetector::stillness(const FrameDescriptor& descriptor,
+                                                    const std::vector<Patch>& cells) const
 {
-  return static_cast<double>(metric_.distance(a.data(), b.data())) /
-         static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
-}
-
-bool OnlineDetector::withinStillNoise(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const
-{
-  // A real camera that stands still does not give the same image twice: sensor noise flips a few bits a frame.
-  // EuRoC V1_01's first 40 frames (the MAV on the ground, 20 Hz) lie 0.006 apart (2 bits of HOG-B's 324) and all
-  // within 0.031 of the first, while no two consecutive frames of a moving camera here come closer than 0.043
-  // (KITTI 07 at 10 Hz) or 0.049 (Gardens Point). Judged against the stretch's first frame too, so a noisy
-  // frame that strays from the last stored one does not start a new stretch.
-  if (config_.stop_distance <= 0.0 || !has_last_stored_ || last_stored_.size() != descriptor.size() ||
-      still_anchor_.size() != descriptor.size())
-    return false;
-  const bool near = normalizedDistance(descriptor, last_stored_) <= config_.stop_distance ||
-                    normalizedDistance(descriptor, still_anchor_) <= config_.stop_distance;
-  return near && (config_.illumination_invariance || textured(cells, kMinTextureStdDev));
-}
-
-bool OnlineDetector::standsStill(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const
-{
-  if (config_.standstill_distance <= 0.0 || !has_last_stored_ || last_stored_.size() != descriptor.size())
-    return false;
-  if (normalizedDistance(descriptor, last_stored_) > config_.standstill_distance)
-    return false;
-  // A black tunnel frame is the same descriptor at any speed (kMinTextureStdDev). The illumination-invariant
-  // image has another scale: not tested there.
-  return config_.illumination_invariance || textured(cells, kMinTextureStdDev);
+  if (!has_last_stored_ || last_stored_.size() != descriptor.size())
+    return Stillness::Moving;
+  // The same image again (standstill_distance), or a real camera's noise: standing still, it never gives the same
+  // image twice. EuRoC V1_01's first 40 frames (the MAV on the ground, 20 Hz) lie 0.006 apart (2 bits of HOG-B's
+  // 324) and all within 0.031 of the first, while no two consecutive frames of a moving camera here come closer
+  // than 0.043 (KITTI 07 at 10 Hz) or 0.049 (Gardens Point). The noise is judged against the still stretch's
+  // first frame too, so a noisy frame that strays from the last stored one does not start a new stretch.
+  const double to_last = metric_.normalizedDistance(descriptor.data(), last_stored_.data());
+  const bool repeated = config_.standstill_distance > 0.0 && to_last <= config_.standstill_distance;
+  const auto withinNoise = [&](const FrameDescriptor& still)
+  {
+    return still.size() == descriptor.size() &&
+           metric_.normalizedDistance(descriptor.data(), still.data()) <= config_.stop_distance;
+  };
+  const bool noise =
+      config_.stop_distance > 0.0 && (to_last <= config_.stop_distance || withinNoise(still_anchor_));
+  // A black tunnel frame is the same descriptor at any speed (kMinTextureStdDev): it says nothing about motion.
+  // The illumination-invariant image has another scale: not tested there.
+  if (!(repeated || noise) || !(config_.illumination_invariance || textured(cells, kMinTextureStdDev)))
+    return Stillness::Moving;
+  return repeated ? Stillness::Repeated : Stillness::WithinNoise;
 }
 
 FrameOutcome OnlineDetector::process(const FrameInput& original)
@@ -270,7 +264,8 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   outcome.times.describe_ms = millisecondsSince(start);
   if (input.stamp > 0.0)
     last_stamp_ = input.stamp;
-  if (standsStill(descriptor, cells))
+  const Stillness still = stillness(descriptor, cells);
+  if (still == Stillness::Repeated)
   {
     // The same place as the last stored frame: it adds no place and no step to the sequences (a stop must
     // neither grow the history nor become a "revisit" of itself), and it repeats that frame's loop closure.
@@ -287,7 +282,7 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
     confirmation_.repeated(repeated);  // a pending loop closure's repeats wait with it
     return repeated;
   }
-  const bool still_noise = withinStillNoise(descriptor, cells);
+  const bool still_noise = still == Stillness::WithinNoise;
   if (config_.stop_distance > 0.0 && still_frames_ >= config_.stop_frames)
   {
     // A camera that has stayed within its own noise for stop_frames stored frames has stopped (a red light, a
