@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The stream sets every change of the matcher or the decision is judged on (doc/results.md quotes their totals).
 
-  scripts/pace_sets.py SET --out DIR [--bin DIR] [--set key=value]... [--jobs N] [--json FILE]
+  scripts/pace_sets.py SET --out DIR [--bin DIR] [--set key=value]... [--jobs N] [--json FILE] [--clean]
 
 SET is one of
   pace     90 streams: Gardens Point day_right then night_right, day_right then day_left, day_left then
@@ -19,11 +19,13 @@ SET is one of
            five pairings, Nordland frames 300-339 and 1000-1039 both ways; at the profiles of `short`
 (scripts/pace_sweep.py has one more, every steady pace from 1.0x to 2.9x.) Prints one line per stream and profile,
 then the totals: published / wrong / summed recall. --json writes {"stream profile": [published, wrong, recall]}, so
-two runs can be compared stream by stream.
+two runs can be compared stream by stream. Each stream's runs stay in DIR (a Nordland run's distance matrix alone is
+50 MB, the pace set about 1.1 GB); --clean removes them once scored.
 """
 import argparse
 import json
 import os
+import shutil
 
 import pace_eval  # this folder
 
@@ -81,6 +83,7 @@ def main():
     parser.add_argument('--set', action='append', default=[])
     parser.add_argument('--jobs', type=int, default=2)
     parser.add_argument('--json', default='')
+    parser.add_argument('--clean', action='store_true', help="remove each stream's runs once scored")
     args = parser.parse_args()
     results = {}
     for name, first, second, tolerance, config, start, frames, profiles in streams(args.which):
@@ -91,6 +94,8 @@ def main():
             key = '%s %s' % (name, profile)
             results[key] = [published, wrong, recall]
             print('%-40s published %5d  wrong %4d  recall %.3f' % (key, published, wrong, recall), flush=True)
+        if args.clean:
+            shutil.rmtree(os.path.join(args.out, name), ignore_errors=True)
     print('%s: %d streams, published %d / wrong %d / summed recall %.2f' % (
         args.which, len(results), sum(r[0] for r in results.values()), sum(r[1] for r in results.values()),
         sum(r[2] for r in results.values())))
