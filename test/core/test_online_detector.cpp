@@ -388,11 +388,10 @@ TEST(OnlineDetector, ARobotStandingStillClosesNoLoop)
   }
 }
 
-/// The 40 frames of EuRoC V1_01's start (cam0, 20 Hz): the MAV on the ground, a real still camera with its sensor's
-/// noise (consecutive frames 2 bits of HOG-B apart, none the same image as the one before).
-std::vector<cv::Mat> eurocStillFrames()
+/// Every image of a folder of the shared data, in order, read as openable_offline reads it.
+std::vector<cv::Mat> framesIn(const std::string& folder)
 {
-  ImageSource source(openable_test::sharedData("stereo/euroc_v101_micro/cam0/data"));  // as openable_offline reads it
+  ImageSource source(openable_test::sharedData(folder));
   std::vector<cv::Mat> frames;
   cv::Mat image;
   std::string name;
@@ -409,7 +408,9 @@ size_t storedFrames(const std::vector<FrameOutcome>& outcomes)
 
 TEST(OnlineDetector, ARealCameraStandingStillStopsAddingPlacesAfterStopFrames)
 {
-  const std::vector<cv::Mat> still = eurocStillFrames();
+  // The 40 frames of EuRoC V1_01's start (cam0, 20 Hz): the MAV on the ground, a real still camera with its sensor's
+  // noise (consecutive frames 2 bits of HOG-B apart, none the same image as the one before).
+  const std::vector<cv::Mat> still = framesIn("stereo/euroc_v101_micro/cam0/data");
   ASSERT_EQ(still.size(), 40u);
   // Cycled, the 40 real frames are a stop of 400 frames (20 s): its noise, not one image repeated.
   std::vector<cv::Mat> stop;
@@ -447,13 +448,8 @@ TEST(OnlineDetector, AMovingCameraIsNeverTakenForAStop)
 {
   // Consecutive frames of a moving camera are further apart than a still camera's noise: Gardens Point at a frame a
   // metre, KITTI 07 at 10 Hz (a car). Every frame is stored.
-  std::vector<cv::Mat> kitti;
-  for (int i = 0; i < 160; ++i)
-  {
-    char name[64];
-    std::snprintf(name, sizeof(name), "kitti/07_first160/image_0/%06d.png", i);
-    kitti.push_back(cv::imread(openable_test::sharedData(name), cv::IMREAD_GRAYSCALE));
-  }
+  const std::vector<cv::Mat> kitti = framesIn("kitti/07_first160/image_0");
+  ASSERT_EQ(kitti.size(), 160u);
   const std::vector<const std::vector<cv::Mat>*> streams = {&gardensPointStream("day_right", "night_right"), &kitti};
   for (const std::vector<cv::Mat>* frames : streams)
   {
