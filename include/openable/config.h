@@ -69,6 +69,13 @@ struct Config
   bool illumination_invariance = false;     ///< paper Eq. 6 before description (needs colour input)
   double alpha = 0.47;                      ///< alpha of Eq. 6 (0.47 for KITTI's Flea2, see Eq. 7)
   int patch_normalization = 0;              ///< block side for local contrast normalisation of patches (0 = off)
+  /// Fraction of the image width a revisit may see the scene shifted sideways (a camera on the other side of the
+  /// path, or turned a little): a place is described from the image's centre, 1 - 2 x lateral_shift of its width,
+  /// and a query frame also shifted that far left and right; its distance to a place is the smallest of the three
+  /// (the pace matcher, max_pace > 1; the diagonal sums compare the centres). 0 = the whole image, no shift.
+  /// Mono images and a stereo camera's left image with a mono descriptor; not a panorama (matched at every
+  /// rotation already) nor a disparity descriptor (D-LDB: the disparity is not shifted with the image).
+  double lateral_shift = 0.1;
   std::string descriptor = "HOG-B";         ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG
 
   // Matching.

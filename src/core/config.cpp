@@ -243,6 +243,7 @@ Config Config::paper()
   c.sequence_length = 1;
   c.min_uniqueness = 0.0;
   c.max_pace = 1;
+  c.lateral_shift = 0.0;
   c.pace_tolerance = 1;
   c.slip_penalty = 0.0;
   c.pace_prior = 0.0;

@@ -123,6 +123,11 @@ const std::vector<KeyAccess>& table()
       makeKey("alpha", "alpha of Eq. 6 (0.47 for KITTI's camera; Eq. 7 from peak wavelengths)", &Config::alpha).range(0, 1).describes(),
       makeKey("patch_normalization", "block side (pixels of the patch) for local contrast normalisation; 0 = off",
               &Config::patch_normalization).range(0, 1024).describes(),
+      makeKey("lateral_shift",
+              "fraction of the image width a revisit may see the scene shifted sideways: places are described from the "
+              "centre (1 - 2 x lateral_shift of the width), queries also shifted left and right, the smallest distance "
+              "counts (max_pace > 1); 0 = whole image. Mono images only: not panoramas, not D-LDB",
+              &Config::lateral_shift).range(0, 0.25).describes(),
       makeKey("descriptor", "LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG", &Config::descriptor).describes(),
       makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length).range(1, 10000).live(),
       makeKey("min_sequence_length",

@@ -8,7 +8,8 @@
 //   BM_ConfigPaceMatch/<config>/<N>   the same frame with sequences at any pace (PaceMatcher, the config's max_pace,
 //                                     pace_penalty and pace_tolerance; max_pace 3 when the config says 1), the
 //                                     matcher the shipped configurations run (with their slip_penalty and
-//                                     pace_prior), while no loop is published: a robot on new ground
+//                                     pace_prior), while no loop is published: a robot on new ground; with
+//                                     the config's lateral_shift, each query with its two shifted views
 //   BM_ConfigPaceMatchPublished/<config>/<N>
 //                                     BM_ConfigPaceMatch while a run is published: no pace prior to add (configs
 //                                     whose pace_prior is not 0)
@@ -203,22 +204,29 @@ void configPaceMatch(benchmark::State& state, const std::string& name, size_t n,
   openable::PaceMatcher matcher(db.layout(), L, config.bidirectional, pace);
   matcher.setSearching(searching);
   std::mt19937_64 rng(99);
-  std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(db.layout().frameWords()));
+  // Each query with its two shifted views where the configuration has them (lateral_shift: the detector matches
+  // them all, the smallest distance counts), one after another behind the query.
+  const size_t words = db.layout().frameWords();
+  const size_t views = config.lateral_shift > 0.0 ? 2 : 0;
+  std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(words * (1 + views)));
   for (auto& q : queries)
-    randomDescriptor(db.layout(), rng, q.data());
+    for (size_t v = 0; v <= views; ++v)
+      randomDescriptor(db.layout(), rng, q.data() + v * words);
+  const auto match = [&](const openable::FrameDescriptor& q) { matcher.matchShifted(q.data(), q.data() + words, views, db, n); };
   for (int i = 0; i < 3; ++i)  // past the first row, which has no path behind it
-    matcher.match(queries[i % queries.size()].data(), db, n);
+    match(queries[i % queries.size()]);
   size_t i = 0;
   std::vector<size_t> candidates;
   const size_t wanted = size_t(std::max(config.top_k, 2));
   for (auto _ : state)
   {
-    matcher.match(queries[i++ % queries.size()].data(), db, n);
+    match(queries[i++ % queries.size()]);
     matcher.smallestDistinct(wanted, size_t(config.uniqueness_window), 1, candidates);
     benchmark::DoNotOptimize(candidates.data());
   }
   setBytes(state, db);
   state.counters["paces"] = double(matcher.paces().size());
+  state.counters["shifted_views"] = double(views);
 }
 
 void configMemoryRead(benchmark::State& state, const std::string& name, size_t n)

@@ -40,12 +40,18 @@ public:
   {
   }
 
-  void match(const uint64_t* query, const PlaceDatabase& reference, size_t n)
+  /// `shifted`: the query's shifted views, each a whole descriptor; a place's distance is the smallest of all.
+  void match(const uint64_t* query, const PlaceDatabase& reference, size_t n,
+             const std::vector<std::vector<uint64_t>>& shifted = {})
   {
     const float max_distance = static_cast<float>(metric_.layout().maxFrameDistance());
     std::vector<float> raw(n), d(n);
     for (size_t j = 0; j < n; ++j)
+    {
       raw[j] = metric_.distance(query, reference.descriptor(j)) / max_distance;
+      for (const auto& view : shifted)
+        raw[j] = std::min(raw[j], metric_.distance(view.data(), reference.descriptor(j)) / max_distance);
+    }
     for (size_t j = 0; j < n; ++j)
     {
       d[j] = raw[j];
@@ -182,6 +188,49 @@ TEST(PaceMatcher, StaysWithinItsRoundingOfTheFloatRecurrenceAcrossChunksGrowthAn
               << "frame " << t << " column " << j << (bidirectional ? " (bidirectional)" : "") << " slip " << slip;
       }
     }
+}
+
+// A query with shifted views (Config::lateral_shift): each place's frame distance is the smallest of the query's and
+// its views', chunk by chunk as the plain reference computes it over the whole row (2,400 places: two chunks). Views
+// that are copies of the query change nothing, to the bit.
+TEST(PaceMatcher, ShiftedViewsTakeEachPlacesSmallestDistance)
+{
+  const DescriptorLayout layout = binaryLayout(128);
+  std::mt19937_64 rng(31);
+  PlaceDatabase reference(layout);
+  PaceOptions options;
+  options.slip = 0.35f;
+  PaceMatcher matcher(layout, 7, false, options), plain(layout, 7, false, options), copies(layout, 7, false, options);
+  NaivePace naive(layout, 7, matcher.paces(), 3.0f, 0.35f);
+  bool some_view_was_nearer = false;
+  for (int t = 0; t < 40; ++t)
+  {
+    for (int k = 0; k < 60; ++k)
+      reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+    const auto query = openable_test::randomWords(rng, 2);
+    // One view near a stored place (a few bits off it), one random: the smallest distance is not always the query's.
+    const uint64_t* stored = reference.descriptor(size_t(rng() % reference.size()));
+    std::vector<uint64_t> near(stored, stored + layout.frameWords());
+    near[0] ^= 0x5ULL;
+    const std::vector<std::vector<uint64_t>> views{near, openable_test::randomWords(rng, 2)};
+    std::vector<uint64_t> shifted(views[0]);
+    shifted.insert(shifted.end(), views[1].begin(), views[1].end());
+    std::vector<uint64_t> twice(query);
+    twice.insert(twice.end(), query.begin(), query.end());
+    const size_t candidates = reference.size() - 5;
+    matcher.matchShifted(query.data(), shifted.data(), 2, reference, candidates);
+    naive.match(query.data(), reference, candidates, views);
+    plain.match(query.data(), reference, candidates);
+    copies.matchShifted(query.data(), twice.data(), 2, reference, candidates);
+    for (size_t j = 0; j < candidates; ++j)
+    {
+      ASSERT_NEAR(matcher.normalized(j), std::min(1.0f, naive.best(j)), (3.0f * 7 + 2) / 32767.0f)
+          << "frame " << t << " column " << j;
+      ASSERT_EQ(copies.normalized(j), plain.normalized(j)) << "frame " << t << " column " << j;
+      some_view_was_nearer = some_view_was_nearer || matcher.normalized(j) < plain.normalized(j);
+    }
+  }
+  EXPECT_TRUE(some_view_was_nearer);
 }
 
 // The pace prior while searching (PaceOptions::prior): each place's cost is its paths' with the prior, the same

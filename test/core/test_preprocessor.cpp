@@ -91,6 +91,51 @@ TEST(Preprocessor, GlobalPatchIsTheAreaAverageOfTheImage)
   EXPECT_NEAR(patches[0].intensity.at<float>(7, 7), 0.114 * 10 + 0.587 * 20 + 0.299 * 30, 0.5);
 }
 
+// lateral_shift: a place is the centre crop of 1 - 2 x lateral_shift of the width, a query's shifted views the crops of
+// the same width at the left and right edges; each view is exactly the whole-image preprocessing of its crop.
+TEST(Preprocessor, ShiftedViewsAreCropsOfOneWidthAtTheCentreAndBothEdges)
+{
+  Config c;
+  c.patch_size = 16;
+  c.lateral_shift = 0.1;
+  cv::Mat image(40, 100, CV_8UC1);
+  for (int x = 0; x < image.cols; ++x)
+    image.col(x).setTo(2 * x + 20);  // every column its own grey
+  const Preprocessor shifted(c);
+  c.lateral_shift = 0.0;
+  const Preprocessor whole(c);
+  ASSERT_TRUE(shifted.hasShiftedViews(image.size()));
+  EXPECT_FALSE(whole.hasShiftedViews(image.size()));
+  const std::vector<std::pair<Preprocessor::View, int>> views{
+      {Preprocessor::View::Centre, 10}, {Preprocessor::View::Left, 0}, {Preprocessor::View::Right, 20}};
+  for (const auto& [view, left] : views)
+  {
+    const auto got = shifted.patches(image, view);
+    const auto expected = whole.patches(image(cv::Rect(left, 0, 80, 40)));
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(cv::norm(got[0].intensity, expected[0].intensity, cv::NORM_INF), 0.0) << "crop from column " << left;
+    // The view's first patch column averages its crop's first 5 columns (80 / 16): 2 x (left + 2) + 20.
+    EXPECT_FLOAT_EQ(got[0].intensity.at<float>(0, 0), float(2 * (left + 2) + 20));
+  }
+  // Without a shift every view is the whole image; a panorama has none (it is matched at every rotation).
+  EXPECT_EQ(cv::norm(whole.patches(image, Preprocessor::View::Left)[0].intensity, whole.patches(image)[0].intensity,
+                     cv::NORM_INF),
+            0.0);
+  Config ring;
+  ring.camera_type = "panoramic";
+  ring.panoramas = 4;
+  ring.lateral_shift = 0.1;
+  EXPECT_FALSE(Preprocessor(ring).hasShiftedViews(image.size()));
+  // A crop narrower than the patch would be enlarged: a small image keeps its whole frame (80 px cropped to 64 at
+  // lateral_shift 0.1 against a 72-pixel patch).
+  Config small;
+  small.patch_size = 72;
+  small.lateral_shift = 0.1;
+  const cv::Mat frame(40, 80, CV_8UC1, cv::Scalar(90));
+  EXPECT_FALSE(Preprocessor(small).hasShiftedViews(frame.size()));
+  EXPECT_EQ(Preprocessor(small).viewOf(frame.size(), Preprocessor::View::Centre), cv::Rect(0, 0, 80, 40));
+}
+
 TEST(Preprocessor, GridAndPanoramaCellLayout)
 {
   Config c;

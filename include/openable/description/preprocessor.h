@@ -30,6 +30,7 @@ struct PreprocessOptions
   int patch_normalization;
   bool illumination_invariance;
   double alpha;
+  double lateral_shift = 0.0;  ///< Config::lateral_shift: the views are crops of 1 - 2 x this of the width
   /// The descriptor's smallest patch (descriptor_registry.h): a small image's patch is never below it.
   int min_patch_size = 1;
 
@@ -82,8 +83,23 @@ public:
   /// grey input with invariance on, or an image smaller than the cell layout.
   cv::Mat intensity(const cv::Mat& image) const;
 
-  /// The patches of one image, in the order described above. Throws Error as intensity().
-  std::vector<Patch> patches(const cv::Mat& image) const;
+  /// Where an image is seen from (PreprocessOptions::lateral_shift): its centre, what a place stores, or the crop of the
+  /// same width at its left or right edge, a query's shifted views.
+  enum class View
+  {
+    Centre,
+    Left,
+    Right
+  };
+  /// The part of an image of `image` pixels that `view` describes: with lateral_shift > 0 on a mono image, a crop of
+  /// 1 - 2 x lateral_shift of its width at the centre or at an edge, unless the patches would enlarge it (a small
+  /// image keeps its whole frame); otherwise the whole image.
+  cv::Rect viewOf(cv::Size image, View view) const;
+  /// Whether an image of `image` pixels has shifted views (viewOf() differs between them).
+  bool hasShiftedViews(cv::Size image) const;
+  /// The patches of one image, in the order described above, of viewOf()'s part of it, each cell at the whole
+  /// image's patch side. Throws Error as intensity().
+  std::vector<Patch> patches(const cv::Mat& image, View view = View::Centre) const;
 
   /// The patches of one frame of a multi-camera ring (one image per sub-panorama, in ring order).
   std::vector<Patch> patchesFromCameras(const std::vector<cv::Mat>& images) const;
@@ -96,6 +112,8 @@ public:
   void checkInput(const cv::Mat& image, const char* what = "image") const;
 
 private:
+  /// patches() of the whole of `image` (a view's crop), each cell downsampled to `side` x `side`.
+  std::vector<Patch> wholePatches(const cv::Mat& image, int side) const;
   std::vector<Patch> split(const cv::Mat& intensity, const cv::Mat& disparity, int across, int side) const;
   PreprocessOptions options_;
 };

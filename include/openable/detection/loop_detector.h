@@ -68,7 +68,9 @@ public:
   }
 
   /// Matches a frame, then (unless localising) stores it. info.id and info.session are set by the detector.
-  Detection process(const FrameDescriptor& descriptor, FrameInfo info = FrameInfo());
+  /// `shifted`: the frame's shifted views (MapMatcher::match), matched but never stored.
+  Detection process(const FrameDescriptor& descriptor, FrameInfo info = FrameInfo(),
+                    const FrameDescriptor& shifted = FrameDescriptor());
 
   /// The last frame's normalised distance to every stored frame, sessions one after another in map order,
   /// by position; NaN where no comparison was made (exclusion window, the frame itself).

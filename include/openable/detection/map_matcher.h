@@ -94,8 +94,10 @@ public:
   MapMatcher(const Config& config, const DescriptorLayout& layout, bool partial_sequences);
 
   /// Matches the next query frame. own_session is the session the stream stores its frames in (-1: none).
-  /// The map may have gained sessions or frames, or lost its oldest frames, since the last call.
-  Detection match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp);
+  /// The map may have gained sessions or frames, or lost its oldest frames, since the last call. `shifted`: the
+  /// query's shifted views (Config::lateral_shift), whole descriptors one after another, or none.
+  Detection match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp,
+                  const FrameDescriptor& shifted = FrameDescriptor());
 
   /// The last query's normalised distance to every frame of the map, sessions one after another in map
   /// order, each by position; NaN where no comparison was made.

@@ -151,6 +151,9 @@ private:
     Repeated
   };
   Stillness stillness(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
+  /// The input's views shifted left and right (Config::lateral_shift), one descriptor after the other, or none
+  /// where there are none (no shift, a ring, a disparity descriptor).
+  FrameDescriptor shiftedViews(const FrameInput& input) const;
   /// The input's verification features (options_.verify with a camera), or null (the note says why).
   std::unique_ptr<FrameFeatures> queryFeatures(const FrameInput& input, FrameOutcome& outcome) const;
   /// The best match's stored info (FrameOutcome::match), looked up by id: storing the query may have evicted it.

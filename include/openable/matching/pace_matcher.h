@@ -113,7 +113,12 @@ public:
   /// Throws Error when sequence_length < 1 or an option is out of range.
   PaceMatcher(const DescriptorLayout& layout, int sequence_length, bool bidirectional, const PaceOptions& options);
 
-  void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates) override;
+  void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates) override
+  {
+    matchShifted(query, nullptr, 0, reference, candidates);
+  }
+  void matchShifted(const uint64_t* query, const uint64_t* shifted, size_t views, const PlaceDatabase& reference,
+                    size_t candidates) override;
   uint64_t firstId() const override
   {
     return first_id_;
@@ -167,8 +172,10 @@ public:
 private:
   /// Keeps the rows aligned with the reference: drops evicted places, appends new ones at `prior`.
   void align(const PlaceDatabase& reference, size_t candidates);
-  /// raw_ for the chunk of columns [begin, begin + m), with tolerance_ neighbours on each side.
-  void distances(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m);
+  /// raw_ for the chunk of columns [begin, begin + m), with tolerance_ neighbours on each side: the smallest of the
+  /// query's and its `views` shifted views' distances.
+  void distances(const uint64_t* query, const uint64_t* shifted, size_t views, const PlaceDatabase& reference,
+                 size_t begin, size_t m);
   /// Keeps a buffer of costs aligned: drops `front` evicted places, keeps `size` places, new ones at `prior`.
   void resizeCosts(AlignedCosts& costs, size_t front, size_t size);
   /// The costs of pace `pace` over chunk `chunk` of a buffer, at place 0 of the chunk.
@@ -223,6 +230,7 @@ private:
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;  ///< frame distances
+  std::vector<uint32_t> view_raw_;  ///< a shifted view's frame distances, before raw_ takes the smaller
   AlignedCosts entry_;         ///< the entry terms of the kernel
   AlignedCosts extra_;
   AlignedCosts smallest_;

@@ -20,6 +20,17 @@ public:
   /// Adds the next query frame and computes its row against reference positions [0, candidates).
   /// The reference may have grown or lost its oldest frames since the last call.
   virtual void match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates) = 0;
+  /// The same for a query also described shifted sideways (Config::lateral_shift): `shifted` holds `views`
+  /// descriptors of the reference's layout, one after another, and a place's frame distance is the smallest of the
+  /// query's and theirs. A matcher that does not compare shifted views (SequenceMatcher: its sums drop each frame's
+  /// distance again L frames later, from the stored centre) matches the centre alone.
+  virtual void matchShifted(const uint64_t* query, const uint64_t* shifted, size_t views, const PlaceDatabase& reference,
+                            size_t candidates)
+  {
+    (void)shifted;
+    (void)views;
+    match(query, reference, candidates);
+  }
   /// The current row covers reference ids [firstId(), firstId() + columns()).
   virtual uint64_t firstId() const = 0;
   virtual size_t columns() const = 0;

@@ -91,6 +91,7 @@ PreprocessOptions PreprocessOptions::from(const Config& config)
   o.patch_normalization = config.patch_normalization;
   o.illumination_invariance = config.illumination_invariance;
   o.alpha = config.alpha;
+  o.lateral_shift = config.lateral_shift;
   if (const DescriptorInfo* row = findDescriptor(config.descriptor))
     o.min_patch_size = row->min_patch_size;
   return o;
@@ -146,9 +147,36 @@ cv::Mat Preprocessor::intensity(const cv::Mat& image) const
   return toOneChannel(image, options_.illumination_invariance, options_.alpha);
 }
 
-std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
+cv::Rect Preprocessor::viewOf(cv::Size image, View view) const
+{
+  // A crop of 1 - 2 x lateral_shift of the width: at the centre, or at either edge. A camera on the other side of a
+  // path sees the scene shifted sideways by a tenth of the image or more (Gardens Point day_left against
+  // night_right); the crops of the same width keep one scale, so a shifted view is compared cell for cell.
+  const int margin = static_cast<int>(std::lround(options_.lateral_shift * image.width));
+  const int width = image.width - 2 * margin;
+  // Never a crop the patches would enlarge: Nordland's 64x32 frames cropped to 52x32 and stretched to a 64-pixel
+  // patch (or described at 52, another HOG cell) published wrong loops where the whole frame published none.
+  const int patch_columns = cellsAcross() * options_.patchSide(image);
+  if (options_.lateral_shift <= 0.0 || options_.camera == CameraType::Panoramic || margin < 1 ||
+      width < patch_columns)
+    return cv::Rect(0, 0, image.width, image.height);
+  const int left = view == View::Left ? 0 : (view == View::Right ? 2 * margin : margin);
+  return cv::Rect(left, 0, width, image.height);
+}
+
+bool Preprocessor::hasShiftedViews(cv::Size image) const
+{
+  return viewOf(image, View::Left) != viewOf(image, View::Right);
+}
+
+std::vector<Patch> Preprocessor::patches(const cv::Mat& image, View view) const
 {
   checkInput(image);
+  return wholePatches(image(viewOf(image.size(), view)), options_.patchSide(image.size()));
+}
+
+std::vector<Patch> Preprocessor::wholePatches(const cv::Mat& image, int p) const
+{
   const int across = cellsAcross();
   const int down = cellsDown();
   if (image.cols < across || image.rows < down)
@@ -158,7 +186,6 @@ std::vector<Patch> Preprocessor::patches(const cv::Mat& image) const
   // decimation of the 8-bit image first, one pass over its bytes, converting to grey as it goes; then the
   // per-pixel work (logarithms) on the few pixels left, and the small area step to the patch size on one
   // channel.
-  const int p = options_.patchSide(image.size());
   const cv::Size target(across * p, down * p);
   cv::Mat small = options_.illumination_invariance
                       ? illuminationInvariant(decimateTowards(image, target), options_.alpha)
@@ -178,6 +205,7 @@ std::vector<Patch> Preprocessor::patchesFromCameras(const std::vector<cv::Mat>& 
   std::vector<Patch> out;
   PreprocessOptions single = options_;
   single.camera = CameraType::Mono;
+  single.lateral_shift = 0.0;  // a ring is matched at every rotation: each camera's whole image
   const Preprocessor camera(single);
   for (size_t i = 0; i < images.size(); ++i)
   {

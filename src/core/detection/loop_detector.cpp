@@ -60,9 +60,9 @@ LoopDetector::LoopDetector(const ValidConfig& valid, SessionMap map, MapMode mod
 {
 }
 
-Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo info)
+Detection LoopDetector::process(const FrameDescriptor& descriptor, FrameInfo info, const FrameDescriptor& shifted)
 {
-  Detection detection = matcher_.match(descriptor, map_, own_session_, info.stamp);
+  Detection detection = matcher_.match(descriptor, map_, own_session_, info.stamp, shifted);
   if (localisationMode())
     detection.query_id = next_query_id_++;
   else

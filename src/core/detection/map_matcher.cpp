@@ -109,11 +109,16 @@ Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_
   return c;
 }
 
-Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp)
+Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp,
+                            const FrameDescriptor& shifted)
 {
-  if (query.size() != map.layout().frameWords())
+  const size_t words = map.layout().frameWords();
+  if (query.size() != words)
     throw Error("descriptor of " + std::to_string(query.size()) + " words does not fit the map's " +
-                std::to_string(map.layout().frameWords()) + " words");
+                std::to_string(words) + " words");
+  if (shifted.size() % words != 0)
+    throw Error("shifted views of " + std::to_string(shifted.size()) + " words are not whole descriptors of " +
+                std::to_string(words) + " words");
   last_query_ = query;
   while (matchers_.size() < map.sessionCount())
     matchers_.push_back(makeMatcher(map.layout()));
@@ -139,7 +144,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
       detection.exclusion_edge_id = frames.firstId() + columns - 1;
     }
     RowMatcher& matcher = *matchers_[s];
-    matcher.match(query.data(), frames, columns);
+    matcher.matchShifted(query.data(), shifted.data(), shifted.size() / words, frames, columns);
     detection.candidates += matcher.smallestDistinct(wanted, window, minTerms(), taken_);
     for (size_t column : taken_)
       picks.push_back({matcher.normalized(column, nullptr, minTerms()), s, column});

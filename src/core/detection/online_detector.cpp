@@ -156,6 +156,22 @@ FrameDescriptor OnlineDetector::describe(const FrameInput& input) const
   return describer_.describe(placePatches(input));
 }
 
+FrameDescriptor OnlineDetector::shiftedViews(const FrameInput& input) const
+{
+  const Preprocessor& pre = describer_.preprocessor();
+  FrameDescriptor views;
+  if (input.image.empty() || !pre.hasShiftedViews(input.image.size()) || describer_.descriptor().needs_disparity)
+    return views;
+  // The place stores its centre; the frame looks for it from both sides too (a camera on the other side of the
+  // path, or turned a little, sees the scene shifted by a tenth of the image or more).
+  for (const Preprocessor::View view : {Preprocessor::View::Left, Preprocessor::View::Right})
+  {
+    const FrameDescriptor d = describer_.describe(pre.patches(input.image, view));
+    views.insert(views.end(), d.begin(), d.end());
+  }
+  return views;
+}
+
 bool OnlineDetector::isKeyframe(const FrameInput& input)
 {
   if (options_.keyframe_distance <= 0.0 && options_.keyframe_angle <= 0.0)
@@ -299,7 +315,10 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   }
 
   start = std::chrono::steady_clock::now();
-  outcome.detection = detector_.process(descriptor, outcome.query);
+  const FrameDescriptor shifted = shiftedViews(input);
+  outcome.times.describe_ms += millisecondsSince(start);
+  start = std::chrono::steady_clock::now();
+  outcome.detection = detector_.process(descriptor, outcome.query, shifted);
   outcome.stored = true;
   outcome.query.id = outcome.detection.query_id;
   if (!detector_.localisationMode())

@@ -223,7 +223,8 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
   columns_ = candidates;
 }
 
-void PaceMatcher::distances(const uint64_t* query, const PlaceDatabase& reference, size_t begin, size_t m)
+void PaceMatcher::distances(const uint64_t* query, const uint64_t* shifted, size_t views,
+                            const PlaceDatabase& reference, size_t begin, size_t m)
 {
   // raw_[tolerance + i] is the distance of place begin + i; neighbours past either end of the row never win
   // the nearest distance.
@@ -237,9 +238,20 @@ void PaceMatcher::distances(const uint64_t* query, const PlaceDatabase& referenc
   std::fill(raw_.begin() + static_cast<long>(first + (high - low)), raw_.begin() + static_cast<long>(m + 2 * tolerance),
             far);
   metric_.row(query, reference.descriptor(low), high - low, raw_.data() + first);
+  // The chunk's descriptors are in cache now: each shifted view costs its popcounts, not another read of the map.
+  view_raw_.resize(high - low);
+  const size_t words = metric_.layout().frameWords();
+  for (size_t v = 0; v < views; ++v)
+  {
+    metric_.row(shifted + v * words, reference.descriptor(low), high - low, view_raw_.data());
+    uint32_t* own = raw_.data() + first;
+    for (size_t i = 0; i < high - low; ++i)
+      own[i] = std::min(own[i], view_raw_[i]);
+  }
 }
 
-void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, size_t candidates)
+void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, size_t views,
+                               const PlaceDatabase& reference, size_t candidates)
 {
   const bool first_row = columns_ == 0;
   align(reference, candidates);
@@ -356,7 +368,7 @@ void PaceMatcher::match(const uint64_t* query, const PlaceDatabase& reference, s
       rows[v].from = own;
       rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
     }
-    distances(query, reference, chunk.begin, chunk.m);
+    distances(query, shifted, views, reference, chunk.begin, chunk.m);
     const pace_kernels::ChunkSums sums = kernel_(chunk);
     distance_sum += sums.sum;
     square_sum += sums.squares;
