@@ -75,7 +75,7 @@ struct Config
   /// (the pace matcher, max_pace > 1; the diagonal sums compare the centres). 0 = the whole image, no shift.
   /// Mono images and a stereo camera's left image with a mono descriptor; not a panorama (matched at every
   /// rotation already) nor a disparity descriptor (D-LDB: the disparity is not shifted with the image).
-  double lateral_shift = 0.1;
+  double lateral_shift = 0.0;
   std::string descriptor = "HOG-B";         ///< LDB | D-LDB | BRIEF | BRISK | ORB | FREAK | HOG-B | SIFT | SURF | HOG
 
   // Matching.

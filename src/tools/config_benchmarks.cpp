@@ -16,6 +16,8 @@
 //   BM_ConfigPaceMatchNoSlip/<config>/<N>
 //                                     BM_ConfigPaceMatch with slip_penalty 0: what following a path one place off
 //                                     its line costs a frame (configs whose slip_penalty is not 0)
+//   BM_ConfigPaceMatchShifted/default/<N>
+//                                     BM_ConfigPaceMatch with two shifted views a query (lateral_shift > 0)
 //   BM_ConfigMemoryRead/<config>/<N>  reading those N descriptors once (a sum over every word)
 //   BM_ConfigMatchLength/gardens_point/10000000/<L>
 //                                     BM_ConfigMatch with another sequence length: a frame reads each descriptor
@@ -188,9 +190,10 @@ void configMatch(benchmark::State& state, const std::string& name, size_t n, int
   setBytes(state, db);
 }
 
-/// `sequence_length` 0: the config's own.
+/// `sequence_length` 0: the config's own. `shifted`: each query with two shifted views, whatever the config's
+/// lateral_shift says (the views are matched where it is above 0).
 void configPaceMatch(benchmark::State& state, const std::string& name, size_t n, bool slip, bool searching,
-                     int sequence_length)
+                     int sequence_length, bool shifted)
 {
   const openable::Config config = shipped(name);
   const int L = sequence_length > 0 ? sequence_length : config.sequence_length;
@@ -207,12 +210,13 @@ void configPaceMatch(benchmark::State& state, const std::string& name, size_t n,
   // Each query with its two shifted views where the configuration has them (lateral_shift: the detector matches
   // them all, the smallest distance counts), one after another behind the query.
   const size_t words = db.layout().frameWords();
-  const size_t views = config.lateral_shift > 0.0 ? 2 : 0;
+  const size_t views = shifted || config.lateral_shift > 0.0 ? 2 : 0;
   std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(words * (1 + views)));
   for (auto& q : queries)
     for (size_t v = 0; v <= views; ++v)
       randomDescriptor(db.layout(), rng, q.data() + v * words);
-  const auto match = [&](const openable::FrameDescriptor& q) { matcher.matchShifted(q.data(), q.data() + words, views, db, n); };
+  const auto match = [&](const openable::FrameDescriptor& q)
+  { matcher.matchShifted(q.data(), q.data() + words, views, db, n); };
   for (int i = 0; i < 3; ++i)  // past the first row, which has no path behind it
     match(queries[i % queries.size()]);
   size_t i = 0;
@@ -262,22 +266,27 @@ void registerConfigBenchmarks()
       const std::string suffix = name + "/" + std::to_string(n);
       benchmark::RegisterBenchmark(("BM_ConfigMatch/" + suffix).c_str(), configMatch, name, n, 0)
           ->Unit(benchmark::kMillisecond);
-      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n, true, true, 0)
+      benchmark::RegisterBenchmark(("BM_ConfigPaceMatch/" + suffix).c_str(), configPaceMatch, name, n, true, true, 0,
+                                   false)
           ->Unit(benchmark::kMillisecond);
       if (shipped(name).pace_prior > 0.0)  // else BM_ConfigPaceMatch is this frame already
         benchmark::RegisterBenchmark(("BM_ConfigPaceMatchPublished/" + suffix).c_str(), configPaceMatch, name, n, true,
-                                     false, 0)
+                                     false, 0, false)
             ->Unit(benchmark::kMillisecond);
       if (shipped(name).slip_penalty > 0.0)  // else BM_ConfigPaceMatch is this frame already
         benchmark::RegisterBenchmark(("BM_ConfigPaceMatchNoSlip/" + suffix).c_str(), configPaceMatch, name, n, false,
-                                     true, 0)
+                                     true, 0, false)
+            ->Unit(benchmark::kMillisecond);
+      if (name == "default")  // lateral_shift 0.12: three distances a place from one read of the map
+        benchmark::RegisterBenchmark(("BM_ConfigPaceMatchShifted/" + suffix).c_str(), configPaceMatch, name, n, true,
+                                     true, 0, true)
             ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
           ->Unit(benchmark::kMillisecond);
       if (name == "default" && n == 1000000)
         for (int L : {10, 30, 100, 300})
           benchmark::RegisterBenchmark(("BM_ConfigPaceMatchLength/" + suffix + "/" + std::to_string(L)).c_str(),
-                                       configPaceMatch, name, n, true, true, L)
+                                       configPaceMatch, name, n, true, true, L, false)
               ->Unit(benchmark::kMillisecond);
       if (name != "gardens_point" || n != 10000000)
         continue;

@@ -83,8 +83,8 @@ public:
   /// grey input with invariance on, or an image smaller than the cell layout.
   cv::Mat intensity(const cv::Mat& image) const;
 
-  /// Where an image is seen from (PreprocessOptions::lateral_shift): its centre, what a place stores, or the crop of the
-  /// same width at its left or right edge, a query's shifted views.
+  /// Where an image is seen from (PreprocessOptions::lateral_shift): its centre, what a place stores, or the crop
+  /// of the same width at its left or right edge, a query's shifted views.
   enum class View
   {
     Centre,
