@@ -189,6 +189,19 @@ TEST(LoopDetector, WrongDescriptorSizeIsAClearError)
 {
   LoopDetector detector{Config::paper()};
   EXPECT_THROW(detector.process(FrameDescriptor(3)), Error);
+  // Shifted views (lateral_shift) are whole descriptors of the layout, one after another: a part of one is refused
+  // before anything is stored.
+  const size_t words = descriptorLayout(Config::paper()).frameWords();
+  try
+  {
+    detector.process(FrameDescriptor(words), FrameInfo(), FrameDescriptor(words + 1));
+    FAIL() << "accepted a shifted view of " << words + 1 << " words";
+  }
+  catch (const Error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("whole descriptors"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(detector.map().frameCount(), 0u);
 }
 
 TEST(LoopDetector, MinSequenceLengthLeavesPartialSequencesOut)

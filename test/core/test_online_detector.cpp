@@ -194,9 +194,9 @@ TEST(OnlineDetector, ViewsShiftedSidewaysFindTheOtherSideOfThePathAtNight)
   Config shifted = shipped("default");
   ASSERT_EQ(shifted.lateral_shift, 0.0);
   shifted.lateral_shift = 0.12;
-  const Scored now = expectMoreLoopsAndNoWrongOne(gardensPointStream("day_left", "night_right"), 200, shifted,
-                                                  shipped("default"), 0.4, "day_left_night_right", "_shifted_recall",
-                                                  "_whole_recall");
+  const Scored now =
+      expectMoreLoopsAndNoWrongOne(gardensPointStream("day_left", "night_right"), 200, shifted, shipped("default"), 0.4,
+                                   "day_left_night_right", "_shifted_recall", "_whole_recall");
   EXPECT_GE(now.recall, 0.75);
 }
 

@@ -229,9 +229,9 @@ private:
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   // Scratch for one chunk of columns.
-  std::vector<uint32_t> raw_;  ///< frame distances
+  std::vector<uint32_t> raw_;       ///< frame distances
   std::vector<uint32_t> view_raw_;  ///< a shifted view's frame distances, before raw_ takes the smaller
-  AlignedCosts entry_;         ///< the entry terms of the kernel
+  AlignedCosts entry_;              ///< the entry terms of the kernel
   AlignedCosts extra_;
   AlignedCosts smallest_;
   AlignedCosts with_change_;

@@ -24,8 +24,8 @@ public:
   /// descriptors of the reference's layout, one after another, and a place's frame distance is the smallest of the
   /// query's and theirs. A matcher that does not compare shifted views (SequenceMatcher: its sums drop each frame's
   /// distance again L frames later, from the stored centre) matches the centre alone.
-  virtual void matchShifted(const uint64_t* query, const uint64_t* shifted, size_t views, const PlaceDatabase& reference,
-                            size_t candidates)
+  virtual void matchShifted(const uint64_t* query, const uint64_t* shifted, size_t views,
+                            const PlaceDatabase& reference, size_t candidates)
   {
     (void)shifted;
     (void)views;

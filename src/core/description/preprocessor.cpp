@@ -157,8 +157,7 @@ cv::Rect Preprocessor::viewOf(cv::Size image, View view) const
   // Never a crop the patches would enlarge: Nordland's 64x32 frames cropped to 52x32 and stretched to a 64-pixel
   // patch (or described at 52, another HOG cell) published wrong loops where the whole frame published none.
   const int patch_columns = cellsAcross() * options_.patchSide(image);
-  if (options_.lateral_shift <= 0.0 || options_.camera == CameraType::Panoramic || margin < 1 ||
-      width < patch_columns)
+  if (options_.lateral_shift <= 0.0 || options_.camera == CameraType::Panoramic || margin < 1 || width < patch_columns)
     return cv::Rect(0, 0, image.width, image.height);
   const int left = view == View::Left ? 0 : (view == View::Right ? 2 * margin : margin);
   return cv::Rect(left, 0, width, image.height);
