@@ -31,6 +31,13 @@ DescriptorLayout binaryLayout(int bits)
   return layout;
 }
 
+/// `count` random places of two words join the reference: a row that grows across the matcher's chunks.
+void addRandomPlaces(PlaceDatabase& reference, std::mt19937_64& rng, int count)
+{
+  for (int k = 0; k < count; ++k)
+    reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+}
+
 /// The recurrence of PaceMatcher written the plain way: whole rows, no chunks, no in-place update.
 class NaivePace
 {
@@ -176,8 +183,7 @@ TEST(PaceMatcher, StaysWithinItsRoundingOfTheFloatRecurrenceAcrossChunksGrowthAn
       for (int t = 0; t < 40; ++t)
       {
         // The reference grows by 23 places a frame: new places join each row (test_pace_kernels crosses chunks).
-        for (int k = 0; k < 23; ++k)
-          reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+        addRandomPlaces(reference, rng, 23);
         const auto query = openable_test::randomWords(rng, 2);
         const size_t candidates = reference.size() - 5;
         matcher.match(query.data(), reference, candidates);
@@ -205,8 +211,7 @@ TEST(PaceMatcher, ShiftedViewsTakeEachPlacesSmallestDistance)
   bool some_view_was_nearer = false;
   for (int t = 0; t < 40; ++t)
   {
-    for (int k = 0; k < 60; ++k)
-      reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+    addRandomPlaces(reference, rng, 60);
     const auto query = openable_test::randomWords(rng, 2);
     // One view near a stored place (a few bits off it), one random: the smallest distance is not always the query's.
     const uint64_t* stored = reference.descriptor(size_t(rng() % reference.size()));
@@ -253,8 +258,7 @@ TEST(PaceMatcher, APriorWhileSearchingMatchesTheReferenceAndLeavesTheRecurrenceA
   std::vector<size_t> taken;
   for (int t = 0; t < 40; ++t)
   {
-    for (int k = 0; k < 60; ++k)
-      reference.add(openable_test::randomWords(rng, 2), FrameInfo());
+    addRandomPlaces(reference, rng, 60);
     const auto query = openable_test::randomWords(rng, 2);
     const bool searching = t % 7 != 3;  // a run published now and then
     matcher.setSearching(searching);

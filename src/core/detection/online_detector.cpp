@@ -164,11 +164,10 @@ FrameDescriptor OnlineDetector::shiftedViews(const FrameInput& input) const
     return views;
   // The place stores its centre; the frame looks for it from both sides too (a camera on the other side of the
   // path, or turned a little, sees the scene shifted by a tenth of the image or more).
-  for (const Preprocessor::View view : {Preprocessor::View::Left, Preprocessor::View::Right})
-  {
-    const FrameDescriptor d = describer_.describe(pre.patches(input.image, view));
-    views.insert(views.end(), d.begin(), d.end());
-  }
+  const size_t words = describer_.layout().frameWords();
+  views.resize(2 * words);
+  describer_.describe(pre.patches(input.image, Preprocessor::View::Left), views.data());
+  describer_.describe(pre.patches(input.image, Preprocessor::View::Right), views.data() + words);
   return views;
 }
 
