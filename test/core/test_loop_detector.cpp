@@ -236,6 +236,58 @@ TEST(LoopDetector, MinSequenceLengthLeavesPartialSequencesOut)
   EXPECT_FALSE(std::isnan(row[3]));
 }
 
+// Shifted views (lateral_shift): each candidate says which of the query's views is nearest its place (Candidate::shift:
+// -1 the left edge, +1 the right edge, 0 the centre, also where no view is nearer than the centre), so a backend knows
+// the match faces a view's shift away. Known answers on random descriptors: a map of 12 places, queries whose one view
+// is a stored place.
+TEST(LoopDetector, EachCandidateSaysWhichShiftedViewIsNearestItsPlace)
+{
+  Config c = Config::paper();
+  c.sequence_length = 1;
+  c.max_pace = 3;  // the matcher at any pace compares views (max_pace 1, the paper's sums, compares centres)
+  std::mt19937_64 rng(44);
+  PlaceDatabase map(descriptorLayout(c));
+  std::vector<FrameDescriptor> places;
+  for (int i = 0; i < 12; ++i)
+  {
+    places.push_back(openable_test::randomWords(rng, 22));
+    map.add(places.back());
+  }
+  const auto viewsOf = [](const FrameDescriptor& left, const FrameDescriptor& right)
+  {
+    FrameDescriptor views(left);
+    views.insert(views.end(), right.begin(), right.end());
+    return views;
+  };
+  const FrameDescriptor noise = openable_test::randomWords(rng, 22);
+  struct Case
+  {
+    FrameDescriptor centre, left, right;
+    uint64_t place;
+    int shift;
+  };
+  const std::vector<Case> cases = {
+      {noise, places[4], openable_test::randomWords(rng, 22), 4, -1},  // the left edge sees place 4
+      {noise, openable_test::randomWords(rng, 22), places[9], 9, 1},   // the right edge sees place 9
+      {places[7], places[7], places[7], 7, 0},                         // a tie keeps the centre
+      {places[2], noise, noise, 2, 0},                                 // the centre sees place 2
+  };
+  for (const Case& k : cases)
+  {
+    LoopDetector detector(c, map);
+    const Detection d = detector.process(k.centre, FrameInfo(), viewsOf(k.left, k.right));
+    ASSERT_TRUE(d.has_candidates);
+    EXPECT_EQ(d.best.id, k.place);
+    EXPECT_EQ(d.best.shift, k.shift) << "place " << k.place;
+    for (const Candidate& other : d.top)
+      EXPECT_TRUE(other.shift >= -1 && other.shift <= 1);
+  }
+  // Without views every candidate's shift is 0.
+  LoopDetector plain(c, map);
+  for (const Candidate& other : plain.process(places[5]).top)
+    EXPECT_EQ(other.shift, 0);
+}
+
 TEST(LoopDetector, AcceptanceNeedsAtLeastOneGateAndEverySetGate)
 {
   const auto frames = revisitingStream();

@@ -782,3 +782,49 @@ TEST(PacedStreams, ACameraThatOnlyRotatesInPlacePublishesOnlyLoopsFacingTheSameW
     RecordProperty("rotating_frames", frames);
   }
 }
+
+// The same camera with shifted views (lateral_shift 0.12): a place is its view's centre, and a frame facing 12 % of
+// the view further right shows that centre at its left edge, as near as the frame facing the same way shows it at
+// its centre (a turn shifts the image). So a loop may face either way; each says which of its views matched
+// (Candidate::shift): -1, the query's left edge, means the query faces the shift further right than the match. With
+// it, every loop's heading is known to within the same 5 degrees.
+TEST(PacedStreams, ShiftedViewsOfACameraRotatingInPlaceSayWhichWayEachMatchFaces)
+{
+  const cv::Mat panorama = cv::imread(openable_test::sharedData("panoramic/streetview_pairs/2_1.jpg"), cv::IMREAD_COLOR);
+  ASSERT_FALSE(panorama.empty());
+  const int step = 7, frames = 3 * panorama.cols / step;
+  std::vector<cv::Mat> views;
+  for (int t = 0; t < frames; ++t)
+    views.push_back(viewOf(panorama, t * step));
+  Config config = shippedAtAnyPace("default");
+  config.lateral_shift = 0.12;
+  const int margin = static_cast<int>(std::lround(config.lateral_shift * views[0].cols));  // pixels of heading
+  const std::vector<FrameOutcome> outcomes = settledOutcomes(views, config);
+  std::map<uint64_t, int> frame_of_place;
+  int published = 0, wrong = 0, shifted = 0, facing_elsewhere = 0;
+  for (int t = 0; t < frames; ++t)
+  {
+    if (outcomes[t].stored)
+      frame_of_place[outcomes[t].query.id] = t;
+    if (!outcomes[t].published())
+      continue;
+    ++published;
+    const Candidate& best = outcomes[t].detection.best;
+    ASSERT_EQ(frame_of_place.count(best.id), 1u);
+    ASSERT_TRUE(best.shift >= -1 && best.shift <= 1) << best.shift;
+    // The query's heading less the match's, in pixels of the panorama, in (-cols / 2, cols / 2].
+    int apart = ((t - frame_of_place[best.id]) * step) % panorama.cols;
+    if (apart > panorama.cols / 2)
+      apart -= panorama.cols;
+    const int tolerance = 2 * step + step / 2;
+    facing_elsewhere += std::abs(apart) > tolerance ? 1 : 0;
+    wrong += std::abs(apart + best.shift * margin) > tolerance ? 1 : 0;
+    shifted += best.shift != 0 ? 1 : 0;
+  }
+  EXPECT_EQ(wrong, 0) << "published " << published;
+  const int turn = panorama.cols / step;
+  EXPECT_GE(published, (frames - turn) / 2);
+  RecordProperty("rotating_shifted_published", published);
+  RecordProperty("rotating_shifted_by_a_view", shifted);
+  RecordProperty("rotating_shifted_facing_elsewhere", facing_elsewhere);
+}

@@ -63,6 +63,43 @@ TEST(OfflineTool, DayLeftVsNightRightWritesA200By200Matrix)
   EXPECT_FALSE(cv::imread(out + "/distance_matrix.png").empty());
 }
 
+// lateral_shift: loop_closures.csv says which of the query's views matched (the shift column, as a panorama's). Gardens
+// Point night_right against day_left is the other side of the path: the scene sits to one side, so most loops match
+// through the same edge (measured: 126 of 155 through the left one, 25 the centre, 4 the right).
+TEST(OfflineTool, ShiftedViewsWriteWhichViewMatched)
+{
+  const std::string out = freshDir("views");
+  const Result r = run("--config " + std::string(OPENABLE_SOURCE_DIR) + "/config/default.yaml --reference " +
+                       openable_test::sharedData("gardens_point/day_left") + " --query " +
+                       openable_test::sharedData("gardens_point/night_right") + " --output " + out +
+                       " --set lateral_shift=0.12 --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream csv(out + "/loop_closures.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "query,match,distance,score,status,direction,shift,query_session,match_session");
+  std::map<int, int> views;
+  int loops = 0;
+  while (std::getline(csv, line))
+  {
+    std::vector<std::string> fields;
+    std::stringstream row(line);
+    for (std::string field; std::getline(row, field, ',');)
+      fields.push_back(field);
+    ASSERT_EQ(fields.size(), 9u) << line;
+    const int shift = std::stoi(fields[6]);
+    ASSERT_TRUE(shift >= -1 && shift <= 1) << line;
+    ++views[shift];
+    ++loops;
+  }
+  ASSERT_GE(loops, 100);
+  EXPECT_GT(views[-1], loops / 2);
+  RecordProperty("views_left", views[-1]);
+  RecordProperty("views_centre", views[0]);
+  RecordProperty("views_right", views[1]);
+  fs::remove_all(out);
+}
+
 TEST(OfflineTool, LoopClosureModeMarksExcludedAndFutureFramesNaN)
 {
   const std::string out = freshDir("loop");

@@ -13,7 +13,7 @@ namespace openable
 /// The one home of openable_offline's two decision files, written and read here only:
 /// - loop_closures.csv: one row per published loop closure,
 ///   `query,match,distance,score,status[,direction,shift],query_session,match_session`
-///   (direction and shift with a panoramic camera);
+///   (direction and shift with a panoramic camera, or a mono one with lateral_shift: Candidate::shift);
 /// - decisions.csv: one row per frame, `query,match,distance,score,status,accepted,pace,inliers`
 ///   (distance, score and pace `nan` when the frame had no candidate, match -1; inliers -1 when geometric
 ///   verification did not run on the frame).
@@ -29,8 +29,8 @@ struct LoopCsvFrame
   float score = 0.0f;           ///< the decision score (LoopDecision::score)
   float pace = 1.0f;            ///< pace of the best match's sequence
   FrameStatus status = FrameStatus::TooEarly;
-  int direction = 1;           ///< of the best match (panoramic files only)
-  int shift = 0;               ///< of the best match (panoramic files only)
+  int direction = 1;           ///< of the best match (files with the shift column only)
+  int shift = 0;               ///< of the best match (Candidate::shift; files with the shift column only)
   uint32_t query_session = 0;  ///< session index of the query
   uint32_t match_session = 0;  ///< session index of the best match
   int inliers = -1;            ///< geometric verification's inliers for the best match; -1 when it did not run
@@ -41,15 +41,15 @@ struct LoopCsvFrame
 class LoopCsvWriter
 {
 public:
-  /// panoramic: loop_closures.csv gets the direction and shift columns.
-  explicit LoopCsvWriter(bool panoramic);
+  /// with_shift (a panoramic camera, or lateral_shift): loop_closures.csv gets the direction and shift columns.
+  explicit LoopCsvWriter(bool with_shift);
 
   /// One frame: a row of decisions.csv, and of loop_closures.csv while it is published. Returns its row.
   size_t add(const LoopCsvFrame& frame);
   /// A later word on row `row` (Published once confirmed). Throws Error for a row that was never added.
   void setStatus(size_t row, FrameStatus status);
-  /// Row `row`'s match: a loop closure confirmed later may have moved (placeInHindsight). Throws Error when there is no such
-  /// row.
+  /// Row `row`'s match: a loop closure confirmed later may have moved (placeInHindsight). Throws Error when there is no
+  /// such row.
   void setMatch(size_t row, long match);
   /// The stream ended: every row still pending becomes unconfirmed (no frame after it could confirm it).
   void settlePending();
@@ -64,7 +64,7 @@ public:
   std::string decisions() const;
 
 private:
-  bool panoramic_;
+  bool with_shift_;
   std::vector<LoopCsvFrame> frames_;
 };
 

@@ -15,12 +15,16 @@ namespace openable
 /// One matched reference frame.
 struct Candidate
 {
-  uint64_t id = 0;               ///< id of the reference frame (unique within its session)
-  uint32_t session = 0;          ///< the session it belongs to (index in the map)
-  size_t position = 0;           ///< its position in that session's frames (0 = oldest stored)
-  float distance = 1.0f;         ///< normalised sequence distance in [0, 1], 0 = identical
-  int8_t direction = 1;          ///< +1 same direction, -1 reverse (bidirectional matching)
-  int16_t shift = 0;             ///< circular shift of sub-panoramas that matched best (panoramic)
+  uint64_t id = 0;        ///< id of the reference frame (unique within its session)
+  uint32_t session = 0;   ///< the session it belongs to (index in the map)
+  size_t position = 0;    ///< its position in that session's frames (0 = oldest stored)
+  float distance = 1.0f;  ///< normalised sequence distance in [0, 1], 0 = identical
+  int8_t direction = 1;   ///< +1 same direction, -1 reverse (bidirectional matching)
+  /// Panoramic: the circular shift of sub-panoramas that matched best. Mono with lateral_shift: the query's view
+  /// nearest the place, -1 its left edge, +1 its right edge, 0 its centre (what the place stores): -1 means the place's
+  /// centre appears lateral_shift of the width further left in the query (the camera turned, or stands, that far to
+  /// the right of the place's view); 0 otherwise.
+  int16_t shift = 0;
   uint16_t sequence_length = 0;  ///< terms in the sequence (L, or fewer at the start of a chain)
   float pace = 1.0f;  ///< places of the reference per query frame along the sequence (1: the first pass's pace)
 };
@@ -73,13 +77,13 @@ struct MatchOptions
   int min_sequence_length;       ///< localisation (partial_sequences): fewer frames are not candidates
   int min_loop_sequence_length;  ///< loop-closure use: the same (0: only full sequences of L frames)
   bool bidirectional;
-  int max_pace;               ///< 1: the paper's sequences (SequenceMatcher); more: PaceMatcher
+  int max_pace;  ///< 1: the paper's sequences (SequenceMatcher); more: PaceMatcher
   double pace_penalty;
   int pace_tolerance;
-  double slip_penalty;        ///< a fraction of pace_penalty (PaceMatcher)
-  double pace_prior;          ///< a fraction of pace_penalty (PaceMatcher), while searching
-  int exclusion_window;       ///< own-session frames too recent to be candidates
-  double exclusion_seconds;   ///< the same in seconds of stamp
+  double slip_penalty;       ///< a fraction of pace_penalty (PaceMatcher)
+  double pace_prior;         ///< a fraction of pace_penalty (PaceMatcher), while searching
+  int exclusion_window;      ///< own-session frames too recent to be candidates
+  double exclusion_seconds;  ///< the same in seconds of stamp
   int top_k;
   int uniqueness_window;
 
@@ -123,6 +127,9 @@ private:
   /// The candidate in `column` of `session`'s matcher.
   Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;
   int minTerms() const;
+  /// Candidate::shift with shifted views: which of the last query's views (-1 left, 0 centre, +1 right) is nearest
+  /// `place`.
+  int viewNearest(const uint64_t* place) const;
   /// Detection::relief of the best candidate of `detection`.
   float reliefAround(const SessionMap& map, const Candidate& best) const;
 
@@ -134,6 +141,7 @@ private:
 
   std::vector<std::unique_ptr<RowMatcher>> matchers_;  ///< one per session of the map, in map order
   FrameDescriptor last_query_;
+  FrameDescriptor last_shifted_;  ///< the last query's shifted views (left, right), empty without
   /// One session's candidate column and its distance.
   struct Pick
   {

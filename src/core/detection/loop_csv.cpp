@@ -181,7 +181,7 @@ DecisionRow parseRow(const std::vector<std::string>& f, const Columns& c, const 
 
 }  // namespace
 
-LoopCsvWriter::LoopCsvWriter(bool panoramic) : panoramic_(panoramic) {}
+LoopCsvWriter::LoopCsvWriter(bool with_shift) : with_shift_(with_shift) {}
 
 size_t LoopCsvWriter::add(const LoopCsvFrame& frame)
 {
@@ -215,13 +215,14 @@ void LoopCsvWriter::settlePending()
 std::string LoopCsvWriter::loopClosures() const
 {
   std::ostringstream out;
-  out << "query,match,distance,score,status" << (panoramic_ ? ",direction,shift" : "") << ",query_session,match_session\n";
+  out << "query,match,distance,score,status" << (with_shift_ ? ",direction,shift" : "")
+      << ",query_session,match_session\n";
   for (const LoopCsvFrame& f : frames_)
   {
     if (f.status != FrameStatus::Published)
       continue;
     out << f.query << "," << f.match << "," << formatFloat(f.distance) << "," << formatFloat(f.score) << ",published";
-    if (panoramic_)
+    if (with_shift_)
       out << "," << f.direction << "," << f.shift;
     out << "," << f.query_session << "," << f.match_session << "\n";
   }

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "openable/error.h"
 #include "openable/detection/loop_decision.h"
+#include "openable/error.h"
 #include "openable/matching/pace_matcher.h"
 
 namespace openable
@@ -106,7 +106,23 @@ Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_
     metric_.distance(last_query_.data(), frames.descriptor(c.position), &shift);
     c.shift = static_cast<int16_t>(shift);
   }
+  else if (!last_shifted_.empty())
+    c.shift = static_cast<int16_t>(viewNearest(frames.descriptor(c.position)));
   return c;
+}
+
+int MapMatcher::viewNearest(const uint64_t* place) const
+{
+  // One frame's distances at the place already chosen (not the row's minimum, where every place takes its nearest
+  // view): a backend told -1 or +1 knows the match faces lateral_shift of the view away from the query. A view must be
+  // strictly nearer than the centre, the centre's own place, to count.
+  const size_t words = last_query_.size();
+  const uint32_t centre = metric_.distance(last_query_.data(), place);
+  const uint32_t left = metric_.distance(last_shifted_.data(), place);
+  const uint32_t right = metric_.distance(last_shifted_.data() + words, place);
+  if (std::min(left, right) >= centre)
+    return 0;
+  return left <= right ? -1 : 1;
 }
 
 Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map, int own_session, double stamp,
@@ -120,6 +136,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     throw Error("shifted views of " + std::to_string(shifted.size()) + " words are not whole descriptors of " +
                 std::to_string(words) + " words");
   last_query_ = query;
+  last_shifted_ = shifted.size() == 2 * words ? shifted : FrameDescriptor();
   while (matchers_.size() < map.sessionCount())
     matchers_.push_back(makeMatcher(map.layout()));
 
@@ -178,8 +195,8 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   {
     detection.has_candidates = true;
     detection.best = detection.top.front();
-    detection.uniqueness = matchUniqueness(
-        detection.best.distance, picks.size() < 2 ? std::nullopt : std::optional<float>(picks[1].distance));
+    detection.uniqueness = matchUniqueness(detection.best.distance,
+                                           picks.size() < 2 ? std::nullopt : std::optional<float>(picks[1].distance));
     detection.relief = reliefAround(map, detection.best);
   }
   return detection;
