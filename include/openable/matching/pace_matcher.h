@@ -51,6 +51,15 @@ struct ChunkSums;
 /// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
 /// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
 ///
+/// A large row is screened (PaceOptions::refined_chunks): beyond 16 chunks of 2048 places (32,768 places), every
+/// place also keeps one screen cost, a path that may take any step of 0 to max_pace places a frame for free
+/// (pace_kernels::ScreenChunk; 2 bytes a place read and written), and only the chunks whose smallest screen cost
+/// ranks among the first 16 of the previous frame, each with the chunk after it (where a forward path goes on), and
+/// those refined the frame before that still rank among the first 32, keep and update every pace's costs. A chunk
+/// that starts to be refined starts every pace from its places' screen costs. Candidates come from refined chunks
+/// only. A frame then moves the descriptors and 4 bytes a place, plus every pace's costs of at most 48 chunks; a
+/// row of up to 16 chunks is refined whole, as without the screen.
+///
 /// The kernels of a frame's update; each one gives the same numbers (kBest: the fastest this CPU runs).
 enum class PaceKernel
 {
@@ -104,6 +113,9 @@ struct PaceOptions
   float slip = 0.0f;     ///< a path one place off its line in a frame, as a fraction of `penalty` (0 = never)
   int tolerance = 1;     ///< places a path may be off its line in each frame (0 .. 2)
   float prior = 0.0f;    ///< while searching, a pace 30 % or more from 1x pays this fraction of `penalty` (0 = off)
+  /// A row of more than this many chunks of 2048 places is screened: every place keeps one screen cost, and only
+  /// the chunks the screen ranks first (and the chunk after each) keep every pace's costs. 0 = every chunk, always.
+  size_t refined_chunks = 16;
   PaceKernel kernel = PaceKernel::kBest;  ///< tests and benchmarks pick one; Error when the CPU lacks it
 };
 
@@ -163,6 +175,8 @@ public:
   {
     return slopes_;
   }
+  /// The chunks PaceOptions::refined_chunks takes to refine at least `places` places (0: 0, never screened).
+  static size_t chunksOf(size_t places);
   /// Query frames matched since the last reset.
   uint64_t queries() const
   {
@@ -176,6 +190,14 @@ private:
   /// query's and its `views` shifted views' distances.
   void distances(const uint64_t* query, const uint64_t* shifted, size_t views, const PlaceDatabase& reference,
                  size_t begin, size_t m);
+  /// Whether column `column`'s chunk keeps every pace's costs this frame.
+  bool isRefined(size_t column) const;
+  /// At least min_terms (at most L) frames matched since the last reset.
+  bool enoughEvidence(int min_terms) const;
+  /// refined_ for this frame's `chunks` chunks, from the previous frame's screen (screen_minimum_).
+  void chooseRefined(size_t chunks);
+  /// Every pace's costs of chunk `chunk` (m places) start from its places' screen costs of the last frame.
+  void startFromScreen(size_t chunk, size_t m);
   /// Keeps a buffer of costs aligned: drops `front` evicted places, keeps `size` places, new ones at `prior`.
   void resizeCosts(AlignedCosts& costs, size_t front, size_t size);
   /// The costs of pace `pace` over chunk `chunk` of a buffer, at place 0 of the chunk.
@@ -228,6 +250,13 @@ private:
   std::vector<int16_t> old_best_;  ///< the previous frame's M, while match() runs
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
+  size_t refined_limit_;              ///< PaceOptions::refined_chunks
+  bool portable_screen_;              ///< the screen's portable loop (PaceKernel::kPortable), else the fastest
+  /// The screen's costs of this and the previous frame, pad_ typical places on each side (as best_).
+  std::vector<int16_t> screen_, old_screen_;
+  std::vector<int16_t> screen_minimum_;  ///< per chunk, the smallest screen cost of the last frame
+  std::vector<uint8_t> refined_;         ///< per chunk, whether every pace's costs are updated this frame
+  std::vector<uint8_t> costs_valid_;     ///< per chunk, whether its costs in the buffers are the last frame's
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;       ///< frame distances
   std::vector<uint32_t> view_raw_;  ///< a shifted view's frame distances, before raw_ takes the smaller

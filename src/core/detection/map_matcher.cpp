@@ -26,6 +26,7 @@ MatchOptions MatchOptions::from(const Config& config)
   o.pace_tolerance = config.pace_tolerance;
   o.slip_penalty = config.slip_penalty;
   o.pace_prior = config.pace_prior;
+  o.refined_places = config.refined_places;
   o.exclusion_window = config.exclusion_window;
   o.exclusion_seconds = config.exclusion_seconds;
   o.top_k = config.top_k;
@@ -53,6 +54,7 @@ std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layo
   pace.tolerance = options_.pace_tolerance;
   pace.slip = static_cast<float>(options_.slip_penalty);
   pace.prior = static_cast<float>(options_.pace_prior);
+  pace.refined_chunks = PaceMatcher::chunksOf(static_cast<size_t>(options_.refined_places));
   return std::make_unique<PaceMatcher>(layout, options_.sequence_length, options_.bidirectional, pace);
 }
 
@@ -257,7 +259,8 @@ void MapMatcher::setOptions(const MatchOptions& options)
   const bool new_kind = (options.max_pace <= 1) != (options_.max_pace <= 1) || options.max_pace != options_.max_pace ||
                         options.pace_penalty != options_.pace_penalty ||
                         options.pace_tolerance != options_.pace_tolerance ||
-                        options.slip_penalty != options_.slip_penalty || options.pace_prior != options_.pace_prior;
+                        options.slip_penalty != options_.slip_penalty || options.pace_prior != options_.pace_prior ||
+                        options.refined_places != options_.refined_places;
   if (new_kind)
   {
     options_ = options;

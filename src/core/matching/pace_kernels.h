@@ -109,6 +109,34 @@ constexpr long kAvx512Reach = 32;
 /// CPU runs that reaches that far. Throws Error when the CPU cannot run `kernel` or it does not reach.
 ChunkFn kernelFor(PaceKernel kernel, long reach);
 
+/// One chunk of places of the screen (pace_screen.cpp): a cost a place, the entry of its own frame distance plus a
+/// times the smallest screen cost of the places a path could have come from in one frame (0 to `reach` places
+/// behind, and ahead with bidirectional), whatever its pace was. It follows a revisit at any pace at 2 bytes a place
+/// (a path may zig-zag, so it ranks places, it does not decide): the chunks whose places it ranks first are the
+/// ones PaceMatcher refines with every pace.
+struct ScreenChunk
+{
+  const uint32_t* raw;        ///< the chunk's own frame distances, at raw[i] for place begin + i
+  size_t begin;               ///< the chunk's first place
+  size_t m;                   ///< its places
+  long reach;                 ///< max_pace: places a path may advance in a frame
+  bool bidirectional;         ///< paths may go backwards as well
+  float entry_scale;          ///< the entry term of distance r: entryOf(r, entry_scale), as Chunk::entry_scale
+  int16_t keep;               ///< a in 1/32768, as Chunk::keep
+  const int16_t* old_screen;  ///< the previous frame's screen, indexed by place; valid from -reach to n + reach
+  int16_t* screen;            ///< this frame's, indexed by place
+};
+
+struct ScreenSums
+{
+  uint64_t sum = 0;      ///< of the chunk's own distances (the row's mean and spread)
+  uint64_t squares = 0;
+  int16_t minimum = kOne;  ///< the chunk's smallest screen cost
+};
+
+/// The fastest version this CPU runs (AVX-512BW, AVX2), or the portable loop; the same integers from each.
+ScreenSums screenChunk(const ScreenChunk& chunk, bool portable = false);  // pace_screen.cpp
+
 /// Saturating 16-bit arithmetic of the kernels, written once for the portable kernel and the tests' reference.
 inline int16_t addSaturated(int32_t a, int32_t b)
 {

@@ -81,7 +81,9 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     slip_penalty_(options.slip),
     tolerance_(options.tolerance),
     prior_fraction_(options.prior),
-    kernel_(pace_kernels::kernelFor(options.kernel, long(options.max_pace) + 1))  // throws now, not at a frame
+    kernel_(pace_kernels::kernelFor(options.kernel, long(options.max_pace) + 1)),  // throws now, not at a frame
+    refined_limit_(options.refined_chunks),
+    portable_screen_(options.kernel == PaceKernel::kPortable)
 {
   if (max_pace_ < 1 || max_pace_ > 64)
     throw Error("max_pace " + std::to_string(max_pace_) + " is out of range; expected 1..64 places per frame");
@@ -139,6 +141,11 @@ void PaceMatcher::reset()
   old_best_.clear();
   searched_.clear();
   chunk_minimum_.clear();
+  screen_.clear();
+  old_screen_.clear();
+  screen_minimum_.clear();
+  refined_.clear();
+  costs_valid_.clear();
 }
 
 AlignedCosts& PaceMatcher::current(size_t pace)
@@ -203,6 +210,18 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
   };
   const auto resizeAll = [&](size_t front, size_t size)
   {
+    // A chunk's costs are the last frame's where every place it keeps came from a chunk whose costs were (places
+    // that join start at `prior`, as a path that has seen nothing).
+    const size_t kept = std::min(size, columns_ - std::min(front, columns_));
+    std::vector<uint8_t> valid((size + kChunk - 1) / kChunk, 1);
+    for (size_t k = 0; k < valid.size() && k * kChunk < kept; ++k)
+    {
+      const size_t first = k * kChunk + front, last = std::min(kept, (k + 1) * kChunk) - 1 + front;
+      for (size_t c = first / kChunk; c <= last / kChunk; ++c)
+        valid[k] = valid[k] && (c >= costs_valid_.size() || costs_valid_[c]);
+    }
+    costs_valid_.swap(valid);
+    resize(screen_, front, size);
     resizeCosts(costs_, front, size);
     if (bidirectional_)
       resizeCosts(reverse_, front, size);
@@ -258,6 +277,7 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   const size_t n = columns_;
   const size_t chunks = (n + kChunk - 1) / kChunk;
   chunk_minimum_.assign(chunks, kNoPath);
+  chooseRefined(chunks);
   if (n == 0)
     return;
   const uint64_t t = queries_++;
@@ -278,6 +298,12 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   const double max_distance = static_cast<double>(std::max<uint64_t>(1, metric_.layout().maxFrameDistance()));
   chunk.keep = static_cast<int16_t>(keep_fixed);
   chunk.entry_scale = static_cast<float>((32768.0 - keep_fixed) / 32768.0 * pace_kernels::kOne / max_distance);
+  pace_kernels::ScreenChunk screen;
+  screen.raw = raw_.data() + tolerance_;
+  screen.reach = max_pace_;
+  screen.bidirectional = bidirectional_;
+  screen.entry_scale = chunk.entry_scale;
+  screen.keep = chunk.keep;
   chunk.change =
       static_cast<int16_t>(std::min<double>(pace_kernels::kOne, std::round(double(change_cost) * pace_kernels::kOne)));
   // While the stream looks for a loop, a place is judged by its paths near the first pass's pace first: of the 17
@@ -341,12 +367,20 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   best_.resize(old_best_.size());
   chunk.old_best = old_best_.data() + pad_;
   chunk.best = best_.data() + pad_;
+  std::swap(screen_, old_screen_);
+  screen_.resize(old_screen_.size());
+  screen.old_screen = old_screen_.data() + pad_;
+  screen.screen = screen_.data() + pad_;
   uint64_t distance_sum = 0, square_sum = 0;
   // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
   for (size_t k = 0; k < chunks; ++k)
   {
     chunk.begin = k * kChunk;
     chunk.m = std::min(kChunk, n - chunk.begin);
+    if (refined_[k] && !costs_valid_[k])
+      startFromScreen(k, chunk.m);
+    // A place's screen cost of the last frame, where a chunk's costs are not the last frame's.
+    const auto screened = [&](size_t place) { return old_screen_[pad_ + place]; };
     for (size_t v = 0; v < paces; ++v)
     {
       // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the
@@ -361,24 +395,95 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
           if (k == 0)
             own[-static_cast<long>(q)] = prior_;
           if (k + 1 < chunks)
-            segment(from, k + 1, v)[-static_cast<long>(q)] = own[kChunk - q];
+            segment(from, k + 1, v)[-static_cast<long>(q)] =
+                costs_valid_[k] ? own[kChunk - q] : screened((k + 1) * kChunk - q);
         }
+        else if (k + 1 < chunks)
+          own[chunk.m + q - 1] =
+              costs_valid_[k + 1] ? segment(from, k + 1, v)[q - 1] : screened((k + 1) * kChunk + q - 1);
         else
-          own[chunk.m + q - 1] = k + 1 < chunks ? segment(from, k + 1, v)[q - 1] : prior_;
+          own[chunk.m + q - 1] = prior_;
       rows[v].from = own;
       rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
     }
     distances(query, shifted, views, reference, chunk.begin, chunk.m);
-    const pace_kernels::ChunkSums sums = kernel_(chunk);
-    distance_sum += sums.sum;
-    square_sum += sums.squares;
-    chunk_minimum_[k] = prior_active_ ? costOf(sums.searched_minimum) : costOf(sums.minimum);
+    screen.begin = chunk.begin;
+    screen.m = chunk.m;
+    const pace_kernels::ScreenSums screened_sums = pace_kernels::screenChunk(screen, portable_screen_);
+    screen_minimum_[k] = screened_sums.minimum;
+    distance_sum += screened_sums.sum;
+    square_sum += screened_sums.squares;
+    if (refined_[k])
+    {
+      const pace_kernels::ChunkSums sums = kernel_(chunk);
+      chunk_minimum_[k] = prior_active_ ? costOf(sums.searched_minimum) : costOf(sums.minimum);
+    }
+    else  // a path into the next chunk, or a chunk refined next frame, starts from the screen
+      std::copy_n(screen_.begin() + static_cast<long>(pad_ + chunk.begin), chunk.m,
+                  best_.begin() + static_cast<long>(pad_ + chunk.begin));
   }
+  // A chunk left out this frame keeps costs of an older one.
+  costs_valid_ = refined_;
   flipped_ = bidirectional_ && !flipped_;
   const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
   const double squares = static_cast<double>(square_sum) / static_cast<double>(n) / (max_distance * max_distance);
   prior_ = static_cast<int16_t>(std::lround(std::min(1.0, mean) * pace_kernels::kOne));
   spread_ = static_cast<float>(std::sqrt(std::max(0.0, squares - mean * mean)));
+}
+
+size_t PaceMatcher::chunksOf(size_t places)
+{
+  return (places + kChunk - 1) / kChunk;
+}
+
+void PaceMatcher::chooseRefined(size_t chunks)
+{
+  refined_.assign(chunks, 1);
+  screen_minimum_.resize(chunks, INT16_MAX);  // a chunk that joined the row has no screen cost yet
+  if (refined_limit_ == 0 || chunks <= refined_limit_)
+    return;
+  // The chunks with the smallest screen costs of the last frame and the chunk after each (a forward path goes on into
+  // it; the one before too with bidirectional), and those refined the frame before that still rank among twice as
+  // many: a chunk near the limit does not start again from its screen costs every other frame.
+  std::fill(refined_.begin(), refined_.end(), 0);
+  std::vector<size_t> order(chunks);
+  for (size_t k = 0; k < chunks; ++k)
+    order[k] = k;
+  const auto smaller = [this](size_t a, size_t b)
+  { return screen_minimum_[a] < screen_minimum_[b] || (screen_minimum_[a] == screen_minimum_[b] && a < b); };
+  const size_t kept = std::min(chunks, 2 * refined_limit_);
+  std::partial_sort(order.begin(), order.begin() + static_cast<long>(kept), order.end(), smaller);
+  for (size_t r = 0; r < kept; ++r)
+  {
+    const size_t k = order[r];
+    if (screen_minimum_[k] == INT16_MAX)
+      continue;
+    if (r < refined_limit_)
+    {
+      refined_[k] = 1;
+      if (k + 1 < chunks)
+        refined_[k + 1] = 1;
+      if (bidirectional_ && k > 0)
+        refined_[k - 1] = 1;
+    }
+    else if (k < costs_valid_.size() && costs_valid_[k])
+      refined_[k] = 1;
+  }
+}
+
+void PaceMatcher::startFromScreen(size_t chunk, size_t m)
+{
+  // Every pace of a place starts from its screen cost: the best of its paths at any pace, as a change of pace
+  // would take M (a little lower than M would be: the screen's path may zig-zag).
+  const int16_t* screened = old_screen_.data() + pad_ + chunk * kChunk;
+  for (size_t v = 0; v < slopes_.size(); ++v)
+    std::copy_n(screened, m, segment(current(v), chunk, v));
+  costs_valid_[chunk] = 1;
+}
+
+bool PaceMatcher::isRefined(size_t column) const
+{
+  return column / kChunk < refined_.size() && refined_[column / kChunk];
 }
 
 int16_t PaceMatcher::costAt(size_t column, size_t pace) const
@@ -412,6 +517,8 @@ size_t PaceMatcher::refinedColumn(size_t column) const
     const long last = std::min(static_cast<long>(columns_) - 1, static_cast<long>(column) + kRefineReach);
     for (long j = first; j <= last; ++j)
     {
+      if (!isRefined(static_cast<size_t>(j)))
+        continue;  // a screened chunk's costs are older
       const int32_t cost = costAt(static_cast<size_t>(j), pace);
       const bool nearer = std::labs(j - static_cast<long>(column)) < std::labs(*at - static_cast<long>(column));
       if (cost < smallest || (cost == smallest && nearer))
@@ -449,10 +556,17 @@ float PaceMatcher::value(size_t column, int* direction) const
   return prior_active_ ? costOf(searched_[column]) : costOf(best_[pad_ + column]);
 }
 
+bool PaceMatcher::enoughEvidence(int min_terms) const
+{
+  return evidence_ >= static_cast<uint64_t>(std::min(std::max(1, min_terms), sequence_length_));
+}
+
 float PaceMatcher::normalized(size_t column, int* direction, int min_terms) const
 {
+  if (!isRefined(column))
+    return std::nanf("");  // screened out this frame: no path of every pace to judge it by
   const float best = value(column, direction);
-  if (evidence_ < static_cast<uint64_t>(std::min(std::max(1, min_terms), sequence_length_)) || !(best < kNoPath))
+  if (!enoughEvidence(min_terms) || !(best < kNoPath))
     return std::nanf("");
   return std::min(best, 1.0f);
 }
@@ -464,6 +578,8 @@ uint16_t PaceMatcher::terms(size_t, int) const
 
 float PaceMatcher::chunkMinimum(size_t chunk, const std::vector<size_t>& taken, size_t window) const
 {
+  if (!refined_[chunk])
+    return kNoPath;
   const size_t begin = chunk * kChunk;
   const size_t end = std::min(columns(), begin + kChunk);
   const auto near_taken = [&](size_t begin_or_end_column)
@@ -488,7 +604,7 @@ float PaceMatcher::chunkMinimum(size_t chunk, const std::vector<size_t>& taken, 
 size_t PaceMatcher::smallestDistinct(size_t count, size_t window, int min_terms, std::vector<size_t>& taken) const
 {
   taken.clear();
-  if (columns() == 0 || std::isnan(normalized(0, nullptr, min_terms)))
+  if (columns() == 0 || !enoughEvidence(min_terms))
     return 0;
   const size_t chunks = chunk_minimum_.size();
   std::vector<float> minimum(chunk_minimum_);
