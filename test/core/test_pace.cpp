@@ -353,6 +353,80 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
   }
 }
 
+// A row of more than PaceOptions::refined_chunks chunks of 2048 places is screened: one cost a place, every pace only
+// in the chunks the screen ranks first and the chunk after each. A revisit at 1.5x through a row of 10,240 random
+// places (5 chunks), crossing from one chunk into the next, is found as the whole row finds it, frame by frame, with
+// one chunk refined; a place screened out has no distance to judge it by (NaN). The same while the reference evicts a
+// place every frame (max_history), so that every place moves between frames and chunks start again in part.
+TEST(PaceMatcher, AScreenedRowFollowsARevisitAcrossChunksAsTheWholeRowDoes)
+{
+  const DescriptorLayout layout = binaryLayout(256);
+  for (const bool evicting : {false, true})
+  {
+    std::mt19937_64 rng(8);
+    const size_t places = 5 * 2048;
+    PlaceDatabase reference(layout, evicting ? places : 0);
+    std::vector<std::vector<uint64_t>> descriptors;  // by global id
+    const auto addPlace = [&]()
+    {
+      descriptors.push_back(openable_test::randomWords(rng, 4));
+      reference.add(descriptors.back(), FrameInfo());
+    };
+    for (size_t j = 0; j < places; ++j)
+      addPlace();
+    PaceOptions screened_options;
+    screened_options.refined_chunks = 1;
+    PaceOptions whole_options;
+    whole_options.refined_chunks = 0;
+    PaceMatcher screened(layout, 10, false, screened_options), whole(layout, 10, false, whole_options);
+    int agreed = 0, frames = 0;
+    for (int t = 0; t < 80; ++t)
+    {
+      if (evicting)
+        addPlace();  // the oldest place leaves: every column moves by one
+      const uint64_t truth = 8100 + static_cast<uint64_t>(t * 3 / 2);  // crosses into the last chunk at 8,192
+      auto query = descriptors[truth];
+      query[0] ^= rng() & rng() & rng();  // about 8 bits of 256
+      screened.match(query.data(), reference, reference.size());
+      whole.match(query.data(), reference, reference.size());
+      std::vector<size_t> a, b;
+      screened.smallestDistinct(2, 10, 1, a);
+      whole.smallestDistinct(2, 10, 1, b);
+      if (t < 15)
+        continue;  // the revisit's first frames: its paths are young in both
+      ++frames;
+      ASSERT_FALSE(a.empty());
+      const uint64_t found = reference.firstId() + a[0];
+      EXPECT_NEAR(double(found), double(truth), 1.0) << "frame " << t << (evicting ? " evicting" : "");
+      agreed += a[0] == b.at(0) ? 1 : 0;
+      EXPECT_TRUE(std::isnan(screened.normalized(100))) << "a place of the first chunk, screened out";
+      EXPECT_FALSE(std::isnan(whole.normalized(100)));
+    }
+    EXPECT_EQ(agreed, frames) << (evicting ? "evicting" : "growing");
+  }
+}
+
+// Within refined_chunks the row is refined whole: the same numbers as a matcher that never screens.
+TEST(PaceMatcher, ARowWithinTheRefinedChunksIsTheWholeRow)
+{
+  const DescriptorLayout layout = binaryLayout(128);
+  std::mt19937_64 rng(12);
+  PlaceDatabase reference(layout);
+  PaceOptions limited, never;
+  limited.refined_chunks = 3;
+  never.refined_chunks = 0;
+  PaceMatcher a(layout, 8, true, limited), b(layout, 8, true, never);
+  for (int t = 0; t < 40; ++t)
+  {
+    addRandomPlaces(reference, rng, 150);  // 6,000 places at the end: three chunks
+    const auto query = openable_test::randomWords(rng, 2);
+    a.match(query.data(), reference, reference.size());
+    b.match(query.data(), reference, reference.size());
+    for (size_t j = 0; j < reference.size(); j += 7)
+      ASSERT_EQ(a.normalized(j), b.normalized(j)) << "frame " << t << ", column " << j;
+  }
+}
+
 // Between two of the fast paces followed the best line drifts from the revisit, and its end is placed between it and
 // the neighbouring pace's (refinedColumn): nearer the place the revisit shows than the line's own end.
 TEST(PaceMatcher, PlacesTheEndOfARevisitBetweenTwoFastPacesNearerItsPlace)

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "bit_oracle.h"  // randomWords
+#include "matching/pace_kernels.h"
 #include "openable/matching/pace_matcher.h"
 
 using namespace openable;
@@ -336,5 +337,66 @@ TEST(PaceKernels, EveryKernelsChunkMinimaCarryThePriorExactly)
             ASSERT_EQ(taken.size(), 1u) << what << ", frame " << t;
             ASSERT_EQ(matcher.normalized(taken[0]), lowest) << what << ", frame " << t;
           }
+        }
+}
+
+// The screen of a large row (pace_kernels::ScreenChunk): every version against its definition written plainly, the
+// smallest screen cost of the places a path comes from in one frame (0 to reach places behind, and ahead with
+// bidirectional), a times it rounded, plus the entry of the place's own distance, saturated; the distances' sums and
+// the chunk's smallest cost. Chunks of every length (the vector loops' tails), reaches 1 to 4, both directions,
+// costs up to 1.0 and distances up to the largest.
+TEST(PaceKernels, EveryScreenComputesTheScreenAsDefined)
+{
+  std::mt19937_64 rng(71);
+  for (PaceKernel kernel : supportedPaceKernels())
+    for (bool bidirectional : {false, true})
+      for (long reach : {1L, 3L, 4L})
+        for (size_t m : {size_t(1), size_t(7), size_t(16), size_t(33), size_t(2048)})
+        {
+          const long pad = 8;
+          const size_t begin = 40;  // a chunk further along the row: old_screen is read by place
+          std::vector<int16_t> old_screen(begin + m + 2 * pad), screen(old_screen.size(), -1);
+          std::vector<uint32_t> raw(m);
+          std::uniform_int_distribution<int> cost(0, kOne), distance(0, 384);
+          for (auto& c : old_screen)
+            c = static_cast<int16_t>(cost(rng));
+          for (auto& r : raw)
+            r = static_cast<uint32_t>(distance(rng));
+          raw[0] = 384;  // the largest distance: an entry of at least 1.0 at the first row's scale
+          pace_kernels::ScreenChunk c;
+          c.raw = raw.data();
+          c.begin = begin;
+          c.m = m;
+          c.reach = reach;
+          c.bidirectional = bidirectional;
+          c.entry_scale = m == 1 ? float(kOne) / 384.0f : 0.9f * float(kOne) / 384.0f / 30.0f;
+          c.keep = m == 1 ? 0 : 31744;
+          c.old_screen = old_screen.data() + pad;
+          c.screen = screen.data() + pad;
+          const pace_kernels::ScreenSums sums = pace_kernels::screenFor(kernel)(c);
+          uint64_t sum = 0, squares = 0;
+          int16_t smallest = kOne;
+          for (size_t i = 0; i < m; ++i)
+          {
+            const long j = static_cast<long>(begin + i);
+            int32_t path = old_screen[pad + j];
+            for (long s = 1; s <= reach; ++s)
+            {
+              path = std::min<int32_t>(path, old_screen[pad + j - s]);
+              if (bidirectional)
+                path = std::min<int32_t>(path, old_screen[pad + j + s]);
+            }
+            const float entry = std::nearbyint(std::min(float(raw[i]) * c.entry_scale, float(kOne)));
+            const int16_t expected = saturated(int32_t(entry) + ((path * c.keep + 16384) >> 15));
+            ASSERT_EQ(screen[pad + j], expected) << paceKernelName(kernel) << " m " << m << " place " << i;
+            sum += raw[i];
+            squares += uint64_t(raw[i]) * raw[i];
+            smallest = std::min(smallest, expected);
+          }
+          EXPECT_EQ(screen[pad + begin - 1], -1) << "wrote before the chunk";
+          EXPECT_EQ(screen[pad + begin + m], -1) << "wrote after the chunk";
+          EXPECT_EQ(sums.sum, sum);
+          EXPECT_EQ(sums.squares, squares);
+          EXPECT_EQ(sums.minimum, smallest);
         }
 }

@@ -19,6 +19,8 @@ namespace pace_kernels  // the per-frame kernels, private to the core library (s
 {
 struct Chunk;
 struct ChunkSums;
+struct ScreenChunk;
+struct ScreenSums;
 }  // namespace pace_kernels
 
 /// Sequence matching at any pace: the revisit may advance from 1 / max_pace to max_pace places of the
@@ -190,14 +192,16 @@ private:
   /// query's and its `views` shifted views' distances.
   void distances(const uint64_t* query, const uint64_t* shifted, size_t views, const PlaceDatabase& reference,
                  size_t begin, size_t m);
+  /// A screen cost as a path's cost where a chunk is not refined: plus screen_offset_.
+  int16_t screenedCost(int16_t screen) const;
   /// Whether column `column`'s chunk keeps every pace's costs this frame.
   bool isRefined(size_t column) const;
   /// At least min_terms (at most L) frames matched since the last reset.
   bool enoughEvidence(int min_terms) const;
   /// refined_ for this frame's `chunks` chunks, from the previous frame's screen (screen_minimum_).
   void chooseRefined(size_t chunks);
-  /// Every pace's costs of chunk `chunk` (m places) start from its places' screen costs of the last frame.
-  void startFromScreen(size_t chunk, size_t m);
+  /// Every pace's costs of chunk `chunk`'s stale places start from their screen costs of the last frame.
+  void startFromScreen(size_t chunk);
   /// Keeps a buffer of costs aligned: drops `front` evicted places, keeps `size` places, new ones at `prior`.
   void resizeCosts(AlignedCosts& costs, size_t front, size_t size);
   /// The costs of pace `pace` over chunk `chunk` of a buffer, at place 0 of the chunk.
@@ -251,12 +255,26 @@ private:
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
   size_t refined_limit_;              ///< PaceOptions::refined_chunks
-  bool portable_screen_;              ///< the screen's portable loop (PaceKernel::kPortable), else the fastest
+  pace_kernels::ScreenSums (*screen_kernel_)(const pace_kernels::ScreenChunk&);  ///< chosen once, as kernel_
   /// The screen's costs of this and the previous frame, pad_ typical places on each side (as best_).
   std::vector<int16_t> screen_, old_screen_;
   std::vector<int16_t> screen_minimum_;  ///< per chunk, the smallest screen cost of the last frame
   std::vector<uint8_t> refined_;         ///< per chunk, whether every pace's costs are updated this frame
-  std::vector<uint8_t> costs_valid_;     ///< per chunk, whether its costs in the buffers are the last frame's
+  /// Places [begin, end) of a chunk whose costs in the buffers are not the last frame's (it was not refined).
+  struct Stale
+  {
+    size_t begin = 0, end = 0;
+    bool empty() const
+    {
+      return begin >= end;
+    }
+    bool holds(size_t place) const
+    {
+      return place >= begin && place < end;
+    }
+  };
+  std::vector<Stale> stale_;   ///< per chunk
+  int16_t screen_offset_ = 0;  ///< the last frame's mean of a refined place's M less its screen cost (>= 0)
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;       ///< frame distances
   std::vector<uint32_t> view_raw_;  ///< a shifted view's frame distances, before raw_ takes the smaller

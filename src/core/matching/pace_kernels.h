@@ -134,8 +134,10 @@ struct ScreenSums
   int16_t minimum = kOne;  ///< the chunk's smallest screen cost
 };
 
-/// The fastest version this CPU runs (AVX-512BW, AVX2), or the portable loop; the same integers from each.
-ScreenSums screenChunk(const ScreenChunk& chunk, bool portable = false);  // pace_screen.cpp
+/// The screen of one chunk in the version `kernel` names (kBest: the fastest this CPU runs); every version computes
+/// the same integers. Throws Error as kernelFor() when the CPU lacks it.
+using ScreenFn = ScreenSums (*)(const ScreenChunk&);
+ScreenFn screenFor(PaceKernel kernel);  // pace_screen.cpp
 
 /// Saturating 16-bit arithmetic of the kernels, written once for the portable kernel and the tests' reference.
 inline int16_t addSaturated(int32_t a, int32_t b)

@@ -19,6 +19,7 @@ namespace
 constexpr size_t kChunk = 2048;
 /// The cost of a path that does not exist (before the first place): never the minimum, never overflows.
 constexpr float kNoPath = 1e30f;
+constexpr int64_t kOneCost = pace_kernels::kOne;
 
 /// The paces of max_pace as fractions p / 60 (places per frame), slowest first: from 1 / max_pace to max_pace
 /// in steps of a factor kPaceStep, 1 exactly among them. Between two neighbours a straight line drifts by one
@@ -83,7 +84,7 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     prior_fraction_(options.prior),
     kernel_(pace_kernels::kernelFor(options.kernel, long(options.max_pace) + 1)),  // throws now, not at a frame
     refined_limit_(options.refined_chunks),
-    portable_screen_(options.kernel == PaceKernel::kPortable)
+    screen_kernel_(pace_kernels::screenFor(options.kernel))
 {
   if (max_pace_ < 1 || max_pace_ > 64)
     throw Error("max_pace " + std::to_string(max_pace_) + " is out of range; expected 1..64 places per frame");
@@ -145,7 +146,8 @@ void PaceMatcher::reset()
   old_screen_.clear();
   screen_minimum_.clear();
   refined_.clear();
-  costs_valid_.clear();
+  stale_.clear();
+  screen_offset_ = 0;
 }
 
 AlignedCosts& PaceMatcher::current(size_t pace)
@@ -210,17 +212,26 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
   };
   const auto resizeAll = [&](size_t front, size_t size)
   {
-    // A chunk's costs are the last frame's where every place it keeps came from a chunk whose costs were (places
-    // that join start at `prior`, as a path that has seen nothing).
+    // A place's costs are the last frame's where it came from a chunk whose costs were (places that join start at
+    // `prior`, as a path that has seen nothing). Evicted places move every place: a chunk's first part comes from
+    // one chunk of the last frame, the rest from the next, so what is stale is one end of it or all of it.
     const size_t kept = std::min(size, columns_ - std::min(front, columns_));
-    std::vector<uint8_t> valid((size + kChunk - 1) / kChunk, 1);
-    for (size_t k = 0; k < valid.size() && k * kChunk < kept; ++k)
+    const auto wasValid = [this](size_t old_chunk) { return old_chunk >= stale_.size() || stale_[old_chunk].empty(); };
+    std::vector<Stale> stale((size + kChunk - 1) / kChunk);
+    for (size_t k = 0; k < stale.size() && k * kChunk < kept; ++k)
     {
-      const size_t first = k * kChunk + front, last = std::min(kept, (k + 1) * kChunk) - 1 + front;
-      for (size_t c = first / kChunk; c <= last / kChunk; ++c)
-        valid[k] = valid[k] && (c >= costs_valid_.size() || costs_valid_[c]);
+      const size_t from = k * kChunk + front;       // where the chunk's first place was
+      const size_t split = kChunk - from % kChunk;  // its places before `split` were in chunk from / kChunk
+      const size_t old_places = std::min(kept - k * kChunk, kChunk);  // the rest joined the row
+      const bool head = wasValid(from / kChunk), tail = split >= old_places || wasValid(from / kChunk + 1);
+      if (!head && !tail)
+        stale[k] = Stale{0, old_places};
+      else if (!head)
+        stale[k] = Stale{0, std::min(split, old_places)};
+      else if (!tail)
+        stale[k] = Stale{split, old_places};
     }
-    costs_valid_.swap(valid);
+    stale_.swap(stale);
     resize(screen_, front, size);
     resizeCosts(costs_, front, size);
     if (bidirectional_)
@@ -372,15 +383,19 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   screen.old_screen = old_screen_.data() + pad_;
   screen.screen = screen_.data() + pad_;
   uint64_t distance_sum = 0, square_sum = 0;
+  const bool screening = std::find(refined_.begin(), refined_.end(), 0) != refined_.end();
+  int64_t above_screen = 0;
+  size_t refined_places = 0;
   // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
   for (size_t k = 0; k < chunks; ++k)
   {
     chunk.begin = k * kChunk;
     chunk.m = std::min(kChunk, n - chunk.begin);
-    if (refined_[k] && !costs_valid_[k])
-      startFromScreen(k, chunk.m);
-    // A place's screen cost of the last frame, where a chunk's costs are not the last frame's.
-    const auto screened = [&](size_t place) { return old_screen_[pad_ + place]; };
+    if (refined_[k] && !stale_[k].empty())
+      startFromScreen(k);
+    // A place's screen cost of the last frame as a path's (screenedCost), where a chunk's costs are not the last
+    // frame's.
+    const auto screened = [&](size_t place) { return screenedCost(old_screen_[pad_ + place]); };
     for (size_t v = 0; v < paces; ++v)
     {
       // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the
@@ -396,11 +411,11 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
             own[-static_cast<long>(q)] = prior_;
           if (k + 1 < chunks)
             segment(from, k + 1, v)[-static_cast<long>(q)] =
-                costs_valid_[k] ? own[kChunk - q] : screened((k + 1) * kChunk - q);
+                stale_[k].holds(kChunk - q) ? screened((k + 1) * kChunk - q) : own[kChunk - q];
         }
         else if (k + 1 < chunks)
           own[chunk.m + q - 1] =
-              costs_valid_[k + 1] ? segment(from, k + 1, v)[q - 1] : screened((k + 1) * kChunk + q - 1);
+              stale_[k + 1].holds(q - 1) ? screened((k + 1) * kChunk + q - 1) : segment(from, k + 1, v)[q - 1];
         else
           own[chunk.m + q - 1] = prior_;
       rows[v].from = own;
@@ -409,21 +424,37 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
     distances(query, shifted, views, reference, chunk.begin, chunk.m);
     screen.begin = chunk.begin;
     screen.m = chunk.m;
-    const pace_kernels::ScreenSums screened_sums = pace_kernels::screenChunk(screen, portable_screen_);
+    const pace_kernels::ScreenSums screened_sums = screen_kernel_(screen);
     screen_minimum_[k] = screened_sums.minimum;
     distance_sum += screened_sums.sum;
     square_sum += screened_sums.squares;
     if (refined_[k])
     {
+      // The places a path comes from beyond the chunk (pad_ on each side) in a chunk that was screened last frame:
+      // their M of the last frame is their screen cost as a path's.
+      for (size_t q = 1; q <= pad_; ++q)
+      {
+        if (k > 0 && stale_[k - 1].holds(kChunk - q))
+          old_best_[pad_ + k * kChunk - q] = screened(k * kChunk - q);
+        if (k + 1 < chunks && stale_[k + 1].holds(q - 1))
+          old_best_[pad_ + (k + 1) * kChunk + q - 1] = screened((k + 1) * kChunk + q - 1);
+      }
       const pace_kernels::ChunkSums sums = kernel_(chunk);
       chunk_minimum_[k] = prior_active_ ? costOf(sums.searched_minimum) : costOf(sums.minimum);
+      if (screening)
+        for (size_t i = 0; i < chunk.m; ++i)
+          above_screen += int64_t(best_[pad_ + chunk.begin + i]) - int64_t(screen_[pad_ + chunk.begin + i]);
+      refined_places += chunk.m;
     }
-    else  // a path into the next chunk, or a chunk refined next frame, starts from the screen
-      std::copy_n(screen_.begin() + static_cast<long>(pad_ + chunk.begin), chunk.m,
-                  best_.begin() + static_cast<long>(pad_ + chunk.begin));
   }
+  // How far a refined place's cost lies above its screen cost, on average (the screen's paths may zig-zag, so they
+  // are lower, most of all where nothing matches): a chunk refined next frame starts that much above its screen,
+  // typical for its rank rather than better than every path already followed.
+  if (screening && refined_places > 0)
+    screen_offset_ = static_cast<int16_t>(std::clamp<int64_t>(above_screen / int64_t(refined_places), 0, kOneCost));
   // A chunk left out this frame keeps costs of an older one.
-  costs_valid_ = refined_;
+  for (size_t k = 0; k < chunks; ++k)
+    stale_[k] = refined_[k] ? Stale{} : Stale{0, kChunk};
   flipped_ = bidirectional_ && !flipped_;
   const double mean = static_cast<double>(distance_sum) / static_cast<double>(n) / max_distance;
   const double squares = static_cast<double>(square_sum) / static_cast<double>(n) / (max_distance * max_distance);
@@ -466,19 +497,32 @@ void PaceMatcher::chooseRefined(size_t chunks)
       if (bidirectional_ && k > 0)
         refined_[k - 1] = 1;
     }
-    else if (k < costs_valid_.size() && costs_valid_[k])
+    else if (k < stale_.size() && stale_[k].empty())
       refined_[k] = 1;
   }
 }
 
-void PaceMatcher::startFromScreen(size_t chunk, size_t m)
+void PaceMatcher::startFromScreen(size_t chunk)
 {
   // Every pace of a place starts from its screen cost: the best of its paths at any pace, as a change of pace
   // would take M (a little lower than M would be: the screen's path may zig-zag).
+  const Stale& stale = stale_[chunk];
+  const size_t end = std::min(stale.end, columns_ - chunk * kChunk);
   const int16_t* screened = old_screen_.data() + pad_ + chunk * kChunk;
   for (size_t v = 0; v < slopes_.size(); ++v)
-    std::copy_n(screened, m, segment(current(v), chunk, v));
-  costs_valid_[chunk] = 1;
+  {
+    int16_t* costs = segment(current(v), chunk, v);
+    for (size_t i = stale.begin; i < end; ++i)
+      costs[i] = screenedCost(screened[i]);
+  }
+  for (size_t i = stale.begin; i < end; ++i)  // M of the last frame: the smallest of those
+    old_best_[pad_ + chunk * kChunk + i] = screenedCost(screened[i]);
+  stale_[chunk] = Stale{};
+}
+
+int16_t PaceMatcher::screenedCost(int16_t screen) const
+{
+  return pace_kernels::addSaturated(screen, screen_offset_);
 }
 
 bool PaceMatcher::isRefined(size_t column) const

@@ -138,25 +138,31 @@ __attribute__((target("avx2"))) ScreenSums screenAvx2(const ScreenChunk& c)
 }
 #endif
 
-using ScreenFn = ScreenSums (*)(const ScreenChunk&);
-
-ScreenFn fastestScreen()
-{
-#if defined(__x86_64__) || defined(__i386__)
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw"))
-    return screenAvx512;
-  if (__builtin_cpu_supports("avx2"))
-    return screenAvx2;
-#endif
-  return screenPortable;
-}
 }  // namespace
 
-ScreenSums screenChunk(const ScreenChunk& chunk, bool portable)
+ScreenFn screenFor(PaceKernel kernel)
 {
-  static const ScreenFn fastest = fastestScreen();
-  return portable ? screenPortable(chunk) : fastest(chunk);
+  // The same CPU checks as the chunk kernels' (kernelFor throws first where the CPU lacks the one asked for).
+  const ChunkFn chunk = kernelFor(kernel, 1);
+  (void)chunk;
+  switch (kernel)
+  {
+    case PaceKernel::kPortable:
+      return screenPortable;
+#if defined(__x86_64__) || defined(__i386__)
+    case PaceKernel::kAvx2:
+      return screenAvx2;
+    case PaceKernel::kAvx512:
+      return screenAvx512;
+    case PaceKernel::kBest:
+      __builtin_cpu_init();
+      if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw"))
+        return screenAvx512;
+      return __builtin_cpu_supports("avx2") ? screenAvx2 : screenPortable;
+#endif
+    default:
+      return screenPortable;
+  }
 }
 
 }  // namespace pace_kernels
