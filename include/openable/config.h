@@ -97,7 +97,7 @@ struct Config
   double slip_penalty = 0.35;   ///< PaceMatcher: cost of a sequence moving one place off its line in a frame, as a
                                 ///< fraction of pace_penalty (0 = never); divided by sqrt(pace) on a line above 1x
   int pace_tolerance = 0;       ///< PaceMatcher: places a sequence may be off its line in each frame (0..2)
-  int refined_places = 32768;   ///< PaceMatcher: a row of more places is screened, every pace's costs kept only
+  int screen_places = 131072;   ///< PaceMatcher: a row of more places is screened, every pace's costs kept only
                                 ///< where the screen ranks first (0 = never screened)
   double pace_prior = 0.24;     ///< PaceMatcher: while no loop is published, what a pace 30 % or more from the first
                                 ///< pass's pays to be a place's best (a fraction of pace_penalty; less nearer 1x)

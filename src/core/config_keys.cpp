@@ -166,11 +166,11 @@ const std::vector<KeyAccess>& table()
       makeKey("pace_tolerance",
               "places a sequence may be off its line in each frame, for paces between the ones followed (max_pace > 1)",
               &Config::pace_tolerance).range(0, 2).live(),
-      makeKey("refined_places",
-              "a row of more places than this is screened: one cost a place follows any pace, and only the places "
-              "it ranks first (chunks of 2048, at least 16 of them) keep every pace's costs; 0 = every place always "
-              "(max_pace > 1)",
-              &Config::refined_places).range(0, 1000000000),
+      makeKey("screen_places",
+              "a row of more places than this is screened: one cost a place follows any pace, and only the chunks of "
+              "2048 places it ranks first (a quarter of this many places) keep every pace's costs; 0 = every place "
+              "always (max_pace > 1)",
+              &Config::screen_places).range(0, 1000000000),
       makeKey("standstill_distance",
               "a frame closer than this (normalised distance) to the last stored frame is the camera standing still: "
               "not stored, not matched, it repeats the last decision (0 = off)",

@@ -132,9 +132,9 @@ Scored expectMoreLoopsAndNoWrongOne(const std::vector<cv::Mat>& frames, size_t h
 }
 }  // namespace
 
-// A row beyond refined_places is screened (PaceMatcher): one cost a place, every pace only where the screen ranks first.
+// A row beyond screen_places is screened (PaceMatcher): one cost a place, every pace only where the screen ranks first.
 // Real frames: Nordland summer then winter (1,800 frames each, its own revisit), then Gardens Point day_right then
-// night_right, about 3,900 places in two chunks of 2,048. With refined_places 2,048 one chunk (and the one after it)
+// night_right, about 3,900 places in two chunks of 2,048. With screen_places 2,048 one chunk (and the one after it)
 // keeps every pace; what is published on the Gardens Point revisit is as right and as many as with the whole row.
 TEST(OnlineDetector, AScreenedRowPublishesTheRevisitTheWholeRowPublishes)
 {
@@ -145,9 +145,9 @@ TEST(OnlineDetector, AScreenedRowPublishesTheRevisitTheWholeRowPublishes)
   const auto& gardens = gardensPointStream("day_right", "night_right");
   frames.insert(frames.end(), gardens.begin(), gardens.end());
   Config screened = shipped("default"), whole = shipped("default");
-  ASSERT_EQ(screened.refined_places, 32768);
-  screened.refined_places = 2048;
-  whole.refined_places = 0;
+  ASSERT_EQ(screened.screen_places, 131072);
+  screened.screen_places = 2048;
+  whole.screen_places = 0;
   const auto a = runStream(frames, screened), b = runStream(frames, whole);
   // The Gardens Point part alone: its first traversal starts at frame 3,600, its places at the id stored there.
   const auto gardensScore = [&](const std::vector<FrameOutcome>& outcomes)

@@ -353,8 +353,8 @@ TEST(PaceMatcher, FollowsARevisitAtTwiceThePaceAndRefusesBadParameters)
   }
 }
 
-// A row of more than PaceOptions::refined_chunks chunks of 2048 places is screened: one cost a place, every pace only
-// in the chunks the screen ranks first and the chunk after each. A revisit at 1.5x through a row of 10,240 random
+// A row of more than PaceOptions::screen_chunks chunks of 2048 places is screened: one cost a place, every pace only
+// in the quarter as many chunks (at least one) the screen ranks first and the chunk after each. A revisit at 1.5x through a row of 10,240 random
 // places (5 chunks), crossing from one chunk into the next, is found as the whole row finds it, frame by frame, with
 // one chunk refined; a place screened out has no distance to judge it by (NaN). The same while the reference evicts a
 // place every frame (max_history), so that every place moves between frames and chunks start again in part.
@@ -375,9 +375,9 @@ TEST(PaceMatcher, AScreenedRowFollowsARevisitAcrossChunksAsTheWholeRowDoes)
     for (size_t j = 0; j < places; ++j)
       addPlace();
     PaceOptions screened_options;
-    screened_options.refined_chunks = 1;
+    screened_options.screen_chunks = 1;
     PaceOptions whole_options;
-    whole_options.refined_chunks = 0;
+    whole_options.screen_chunks = 0;
     PaceMatcher screened(layout, 10, false, screened_options), whole(layout, 10, false, whole_options);
     int agreed = 0, frames = 0;
     for (int t = 0; t < 80; ++t)
@@ -406,15 +406,15 @@ TEST(PaceMatcher, AScreenedRowFollowsARevisitAcrossChunksAsTheWholeRowDoes)
   }
 }
 
-// Within refined_chunks the row is refined whole: the same numbers as a matcher that never screens.
+// Within screen_chunks the row is refined whole: the same numbers as a matcher that never screens.
 TEST(PaceMatcher, ARowWithinTheRefinedChunksIsTheWholeRow)
 {
   const DescriptorLayout layout = binaryLayout(128);
   std::mt19937_64 rng(12);
   PlaceDatabase reference(layout);
   PaceOptions limited, never;
-  limited.refined_chunks = 3;
-  never.refined_chunks = 0;
+  limited.screen_chunks = 3;
+  never.screen_chunks = 0;
   PaceMatcher a(layout, 8, true, limited), b(layout, 8, true, never);
   for (int t = 0; t < 40; ++t)
   {

@@ -53,14 +53,16 @@ struct ScreenSums;
 /// A place that joins the row (the reference grew, or the exclusion window let it in) starts from the mean
 /// distance of the previous frame's row: a path that has seen nothing is typical, neither good nor bad.
 ///
-/// A large row is screened (PaceOptions::refined_chunks): beyond 16 chunks of 2048 places (32,768 places), every
+/// A large row is screened (PaceOptions::screen_chunks): beyond 64 chunks of 2048 places (131,072 places), every
 /// place also keeps one screen cost, a path that may take any step of 0 to max_pace places a frame for free
 /// (pace_kernels::ScreenChunk; 2 bytes a place read and written), and only the chunks whose smallest screen cost
 /// ranks among the first 16 of the previous frame, each with the chunk after it (where a forward path goes on), and
 /// those refined the frame before that still rank among the first 32, keep and update every pace's costs. A chunk
-/// that starts to be refined starts every pace from its places' screen costs. Candidates come from refined chunks
-/// only. A frame then moves the descriptors and 4 bytes a place, plus every pace's costs of at most 48 chunks; a
-/// row of up to 16 chunks is refined whole, as without the screen.
+/// that starts to be refined starts every pace from its places' screen costs, raised by how far a refined place's
+/// cost lay above its screen cost on average (the screen's paths may zig-zag: lower, most of all where nothing
+/// matches). Candidates come from refined chunks only. A frame then moves the descriptors and 4 bytes a place, plus
+/// every pace's costs of at most 48 chunks; a row of up to 64 chunks is refined whole, as without the screen (below
+/// that the screen saves too little: at 100,000 places, 49 chunks, it would refine most of them anyway).
 ///
 /// The kernels of a frame's update; each one gives the same numbers (kBest: the fastest this CPU runs).
 enum class PaceKernel
@@ -116,8 +118,9 @@ struct PaceOptions
   int tolerance = 1;     ///< places a path may be off its line in each frame (0 .. 2)
   float prior = 0.0f;    ///< while searching, a pace 30 % or more from 1x pays this fraction of `penalty` (0 = off)
   /// A row of more than this many chunks of 2048 places is screened: every place keeps one screen cost, and only
-  /// the chunks the screen ranks first (and the chunk after each) keep every pace's costs. 0 = every chunk, always.
-  size_t refined_chunks = 16;
+  /// the quarter as many chunks the screen ranks first (at least one; and the chunk after each) keep every pace's
+  /// costs. 0 = every chunk, always.
+  size_t screen_chunks = 64;
   PaceKernel kernel = PaceKernel::kBest;  ///< tests and benchmarks pick one; Error when the CPU lacks it
 };
 
@@ -177,7 +180,7 @@ public:
   {
     return slopes_;
   }
-  /// The chunks PaceOptions::refined_chunks takes to refine at least `places` places (0: 0, never screened).
+  /// The chunks of `places` places, as PaceOptions::screen_chunks counts them (0: 0, never screened).
   static size_t chunksOf(size_t places);
   /// Query frames matched since the last reset.
   uint64_t queries() const
@@ -254,7 +257,8 @@ private:
   std::vector<int16_t> old_best_;  ///< the previous frame's M, while match() runs
   size_t columns_ = 0;
   std::vector<float> chunk_minimum_;  ///< per chunk of columns, both directions, after match()
-  size_t refined_limit_;              ///< PaceOptions::refined_chunks
+  size_t screen_chunks_;              ///< PaceOptions::screen_chunks
+  size_t refined_limit_;              ///< the chunks refined while screening: a quarter of that, at least one
   pace_kernels::ScreenSums (*screen_kernel_)(const pace_kernels::ScreenChunk&);  ///< chosen once, as kernel_
   /// The screen's costs of this and the previous frame, pad_ typical places on each side (as best_).
   std::vector<int16_t> screen_, old_screen_;

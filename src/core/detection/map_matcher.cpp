@@ -26,7 +26,7 @@ MatchOptions MatchOptions::from(const Config& config)
   o.pace_tolerance = config.pace_tolerance;
   o.slip_penalty = config.slip_penalty;
   o.pace_prior = config.pace_prior;
-  o.refined_places = config.refined_places;
+  o.screen_places = config.screen_places;
   o.exclusion_window = config.exclusion_window;
   o.exclusion_seconds = config.exclusion_seconds;
   o.top_k = config.top_k;
@@ -54,7 +54,7 @@ std::unique_ptr<RowMatcher> MapMatcher::makeMatcher(const DescriptorLayout& layo
   pace.tolerance = options_.pace_tolerance;
   pace.slip = static_cast<float>(options_.slip_penalty);
   pace.prior = static_cast<float>(options_.pace_prior);
-  pace.refined_chunks = PaceMatcher::chunksOf(static_cast<size_t>(options_.refined_places));
+  pace.screen_chunks = PaceMatcher::chunksOf(static_cast<size_t>(options_.screen_places));
   return std::make_unique<PaceMatcher>(layout, options_.sequence_length, options_.bidirectional, pace);
 }
 
@@ -260,7 +260,7 @@ void MapMatcher::setOptions(const MatchOptions& options)
                         options.pace_penalty != options_.pace_penalty ||
                         options.pace_tolerance != options_.pace_tolerance ||
                         options.slip_penalty != options_.slip_penalty || options.pace_prior != options_.pace_prior ||
-                        options.refined_places != options_.refined_places;
+                        options.screen_places != options_.screen_places;
   if (new_kind)
   {
     options_ = options;

@@ -83,7 +83,8 @@ PaceMatcher::PaceMatcher(const DescriptorLayout& layout, int sequence_length, bo
     tolerance_(options.tolerance),
     prior_fraction_(options.prior),
     kernel_(pace_kernels::kernelFor(options.kernel, long(options.max_pace) + 1)),  // throws now, not at a frame
-    refined_limit_(options.refined_chunks),
+    screen_chunks_(options.screen_chunks),
+    refined_limit_(std::max<size_t>(1, options.screen_chunks / 4)),
     screen_kernel_(pace_kernels::screenFor(options.kernel))
 {
   if (max_pace_ < 1 || max_pace_ > 64)
@@ -471,11 +472,14 @@ void PaceMatcher::chooseRefined(size_t chunks)
 {
   refined_.assign(chunks, 1);
   screen_minimum_.resize(chunks, INT16_MAX);  // a chunk that joined the row has no screen cost yet
-  if (refined_limit_ == 0 || chunks <= refined_limit_)
+  if (screen_chunks_ == 0 || chunks <= screen_chunks_)
     return;
   // The chunks with the smallest screen costs of the last frame and the chunk after each (a forward path goes on into
   // it; the one before too with bidirectional), and those refined the frame before that still rank among twice as
-  // many: a chunk near the limit does not start again from its screen costs every other frame.
+  // many: a chunk near the limit does not start again from its screen costs every other frame. At most a quarter of
+  // the limit start again in a frame (the best ranked first): each start writes every pace's costs of a chunk, and
+  // where nothing matches the ranking is noise that changes every frame (random queries at L = 10 took 3.5x today's
+  // matcher at 1e6 places, starting a dozen chunks a frame).
   std::fill(refined_.begin(), refined_.end(), 0);
   std::vector<size_t> order(chunks);
   for (size_t k = 0; k < chunks; ++k)
@@ -484,6 +488,15 @@ void PaceMatcher::chooseRefined(size_t chunks)
   { return screen_minimum_[a] < screen_minimum_[b] || (screen_minimum_[a] == screen_minimum_[b] && a < b); };
   const size_t kept = std::min(chunks, 2 * refined_limit_);
   std::partial_sort(order.begin(), order.begin() + static_cast<long>(kept), order.end(), smaller);
+  const auto wasRefined = [this](size_t k) { return k < stale_.size() && stale_[k].empty(); };
+  size_t starts = std::max<size_t>(1, refined_limit_ / 4);
+  const auto refine = [&](size_t k)
+  {
+    if (refined_[k] || (!wasRefined(k) && starts == 0))
+      return;
+    starts -= wasRefined(k) ? 0 : 1;
+    refined_[k] = 1;
+  };
   for (size_t r = 0; r < kept; ++r)
   {
     const size_t k = order[r];
@@ -491,13 +504,13 @@ void PaceMatcher::chooseRefined(size_t chunks)
       continue;
     if (r < refined_limit_)
     {
-      refined_[k] = 1;
+      refine(k);
       if (k + 1 < chunks)
-        refined_[k + 1] = 1;
+        refine(k + 1);
       if (bidirectional_ && k > 0)
-        refined_[k - 1] = 1;
+        refine(k - 1);
     }
-    else if (k < stale_.size() && stale_[k].empty())
+    else if (wasRefined(k))
       refined_[k] = 1;
   }
 }
