@@ -406,6 +406,50 @@ TEST(PaceMatcher, AScreenedRowFollowsARevisitAcrossChunksAsTheWholeRowDoes)
   }
 }
 
+// A row that grows past screen_chunks is pooled (a slot for each refined chunk, its costs moved in), one that
+// shrinks back is refined whole again (the pooled chunks' costs moved back, the others started from the screen), in
+// both directions: a revisit at 1x followed through both switches is found as the whole row finds it.
+TEST(PaceMatcher, ARowSwitchesBetweenScreenedAndWholeAndKeepsItsRevisit)
+{
+  const DescriptorLayout layout = binaryLayout(256);
+  for (const bool bidirectional : {false, true})
+  {
+    std::mt19937_64 rng(21);
+    PlaceDatabase reference(layout);
+    std::vector<std::vector<uint64_t>> descriptors;
+    PaceOptions screened_options, whole_options;
+    screened_options.screen_chunks = 2;
+    whole_options.screen_chunks = 0;
+    PaceMatcher screened(layout, 10, bidirectional, screened_options), whole(layout, 10, bidirectional, whole_options);
+    int agreed = 0, frames = 0;
+    for (int t = 0; t < 60; ++t)
+    {
+      for (int k = 0; k < 300; ++k)  // 300 places a frame: whole up to frame 13, screened after
+      {
+        descriptors.push_back(openable_test::randomWords(rng, 4));
+        reference.add(descriptors.back(), FrameInfo());
+      }
+      // Frames 30-39 match only the first 3,000 places: a row of 2 chunks, refined whole again.
+      const size_t candidates = t >= 30 && t < 40 ? 3000 : reference.size();
+      const uint64_t truth = 200 + static_cast<uint64_t>(t);
+      auto query = descriptors[truth];
+      query[1] ^= rng() & rng() & rng();
+      screened.match(query.data(), reference, candidates);
+      whole.match(query.data(), reference, candidates);
+      std::vector<size_t> a, b;
+      screened.smallestDistinct(2, 10, 1, a);
+      whole.smallestDistinct(2, 10, 1, b);
+      if (t < 15)
+        continue;
+      ++frames;
+      ASSERT_FALSE(a.empty()) << "frame " << t;
+      EXPECT_NEAR(double(a[0]), double(truth), 1.0) << "frame " << t << (bidirectional ? " bidirectional" : "");
+      agreed += a[0] == b.at(0) ? 1 : 0;
+    }
+    EXPECT_EQ(agreed, frames) << (bidirectional ? "bidirectional" : "forward");
+  }
+}
+
 // Within screen_chunks the row is refined whole: the same numbers as a matcher that never screens.
 TEST(PaceMatcher, ARowWithinTheRefinedChunksIsTheWholeRow)
 {

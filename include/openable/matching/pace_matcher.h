@@ -210,8 +210,20 @@ private:
   /// The costs of pace `pace` over chunk `chunk` of a buffer, at place 0 of the chunk.
   int16_t* segment(AlignedCosts& costs, size_t chunk, size_t pace) const
   {
-    return costs.data() + (chunk * slopes_.size() + pace) * segment_ + margin_;
+    return slotSegment(costs, static_cast<size_t>(slot_[chunk]), pace);
   }
+  /// The costs of pace `pace` in slot `slot` of a buffer (a chunk's place in it: slot_), at its place 0.
+  int16_t* slotSegment(AlignedCosts& costs, size_t slot, size_t pace) const
+  {
+    return costs.data() + (slot * slopes_.size() + pace) * segment_ + margin_;
+  }
+  /// While screening, the buffers hold a pool of slots, one for each refined chunk; otherwise one slot for every
+  /// chunk, in order. These switch between the two (after chooseRefined): refined chunks keep their costs.
+  void placeRefinedChunks();
+  void pool();
+  void unpool();
+  /// align() of a pooled row: `front` evicted places leave, every refined chunk's costs move with its places.
+  void rekeyPool(size_t front, size_t size);
   /// The buffer that holds a pace's costs of the last frame.
   AlignedCosts& current(size_t pace);
   const AlignedCosts& current(size_t pace) const;
@@ -279,6 +291,10 @@ private:
   };
   std::vector<Stale> stale_;   ///< per chunk
   int16_t screen_offset_ = 0;  ///< the last frame's mean of a refined place's M less its screen cost (>= 0)
+  std::vector<int32_t> slot_;  ///< per chunk, its slot in costs_ (and reverse_), -1 for none (screened out)
+  bool pooled_ = false;        ///< the buffers hold pool_slots_ slots (screening), not one a chunk
+  std::vector<int32_t> free_slots_;
+  size_t pool_slots_ = 0;  ///< slots of the pool while pooled_
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;       ///< frame distances
   std::vector<uint32_t> view_raw_;  ///< a shifted view's frame distances, before raw_ takes the smaller

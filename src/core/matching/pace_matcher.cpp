@@ -149,6 +149,10 @@ void PaceMatcher::reset()
   refined_.clear();
   stale_.clear();
   screen_offset_ = 0;
+  slot_.clear();
+  pooled_ = false;
+  free_slots_.clear();
+  pool_slots_ = 0;
 }
 
 AlignedCosts& PaceMatcher::current(size_t pace)
@@ -169,6 +173,9 @@ void PaceMatcher::resizeCosts(AlignedCosts& costs, size_t front, size_t size)
   const size_t paces = slopes_.size();
   const size_t kept = std::min(size, columns_ - std::min(front, columns_));
   const size_t chunks = (size + kChunk - 1) / kChunk;
+  // One slot a chunk, in order, for the old layout and the new (resizeAll trims slot_ after).
+  for (size_t k = slot_.size(); k < std::max(chunks, (columns_ + kChunk - 1) / kChunk); ++k)
+    slot_.push_back(static_cast<int32_t>(k));
   if (front > 0 && kept > 0)
   {
     // Evicted places leave: every place moves, in runs within a chunk of both the old and the new layout.
@@ -234,9 +241,25 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
     }
     stale_.swap(stale);
     resize(screen_, front, size);
-    resizeCosts(costs_, front, size);
-    if (bidirectional_)
-      resizeCosts(reverse_, front, size);
+    if (!pooled_ && columns_ == 0 && screen_chunks_ > 0 && stale_.size() > screen_chunks_)
+    {
+      // A first row that will be screened (a large map loaded): a pool with every chunk screened out, not a slot
+      // for every chunk first (340 MB at 1e7 places).
+      refined_.assign(stale_.size(), 0);
+      slot_.assign(stale_.size(), -1);
+      costs_.clear();
+      reverse_.clear();
+      pool();
+    }
+    if (pooled_)
+      rekeyPool(front, size);
+    else
+    {
+      resizeCosts(costs_, front, size);
+      if (bidirectional_)
+        resizeCosts(reverse_, front, size);
+      slot_.resize((size + kChunk - 1) / kChunk);
+    }
     resize(best_, front, size);
   };
   if (reference.firstId() < first_id_ || (columns_ == 0 && reference.firstId() != first_id_))
@@ -290,6 +313,7 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   const size_t chunks = (n + kChunk - 1) / kChunk;
   chunk_minimum_.assign(chunks, kNoPath);
   chooseRefined(chunks);
+  placeRefinedChunks();
   if (n == 0)
     return;
   const uint64_t t = queries_++;
@@ -397,30 +421,34 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
     // A place's screen cost of the last frame as a path's (screenedCost), where a chunk's costs are not the last
     // frame's.
     const auto screened = [&](size_t place) { return screenedCost(old_screen_[pad_ + place]); };
+    // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the last
+    // places of the chunk before, copied before that chunk was updated in place; reverse, the first places of the
+    // chunk after, in the buffer that is only read. Only refined chunks have segments (a slot).
+    const bool next = k + 1 < chunks && refined_[k + 1];
     for (size_t v = 0; v < paces; ++v)
     {
-      // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the
-      // last places of the chunk before, copied before that chunk was updated in place; reverse, the first
-      // places of the chunk after, in the buffer that is only read.
       AlignedCosts& from = current(v);
-      int16_t* own = segment(from, k, v);
+      int16_t* own = refined_[k] ? segment(from, k, v) : nullptr;
       const bool forward = slopes_[v].first > 0;
       for (size_t q = 1; q <= pad_; ++q)
         if (forward)
         {
-          if (k == 0)
+          if (k == 0 && own)
             own[-static_cast<long>(q)] = prior_;
-          if (k + 1 < chunks)
+          if (next)
             segment(from, k + 1, v)[-static_cast<long>(q)] =
-                stale_[k].holds(kChunk - q) ? screened((k + 1) * kChunk - q) : own[kChunk - q];
+                own && !stale_[k].holds(kChunk - q) ? own[kChunk - q] : screened((k + 1) * kChunk - q);
         }
-        else if (k + 1 < chunks)
+        else if (own && k + 1 < chunks)
           own[chunk.m + q - 1] =
-              stale_[k + 1].holds(q - 1) ? screened((k + 1) * kChunk + q - 1) : segment(from, k + 1, v)[q - 1];
-        else
+              next && !stale_[k + 1].holds(q - 1) ? segment(from, k + 1, v)[q - 1] : screened((k + 1) * kChunk + q - 1);
+        else if (own)
           own[chunk.m + q - 1] = prior_;
-      rows[v].from = own;
-      rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
+      if (own)
+      {
+        rows[v].from = own;
+        rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
+      }
     }
     distances(query, shifted, views, reference, chunk.begin, chunk.m);
     screen.begin = chunk.begin;
@@ -543,9 +571,146 @@ bool PaceMatcher::isRefined(size_t column) const
   return column / kChunk < refined_.size() && refined_[column / kChunk];
 }
 
+void PaceMatcher::placeRefinedChunks()
+{
+  const bool screening = std::find(refined_.begin(), refined_.end(), 0) != refined_.end();
+  if (!screening)
+  {
+    if (pooled_)
+      unpool();
+    return;
+  }
+  if (!pooled_)
+    pool();
+  // A chunk left out gives its slot back (its costs would be an older frame's); a chunk refined without one takes
+  // one and starts from its screen costs.
+  for (size_t k = 0; k < refined_.size(); ++k)
+    if (!refined_[k] && slot_[k] >= 0)
+    {
+      free_slots_.push_back(slot_[k]);
+      slot_[k] = -1;
+      stale_[k] = Stale{0, kChunk};
+    }
+  for (size_t k = 0; k < refined_.size(); ++k)
+    if (refined_[k] && slot_[k] < 0)
+    {
+      if (free_slots_.empty())  // cannot happen: chooseRefined refines at most as many chunks as the pool holds
+      {
+        refined_[k] = 0;
+        continue;
+      }
+      slot_[k] = free_slots_.back();
+      free_slots_.pop_back();
+      stale_[k] = Stale{0, kChunk};
+    }
+}
+
+void PaceMatcher::pool()
+{
+  // chooseRefined refines at most the limit's chunks, the one after each (and before, both ways) and as many again
+  // that were refined: a slot for each, where a row refined whole kept a slot for every chunk (340 MB at 1e7 places).
+  pool_slots_ = (bidirectional_ ? 4 : 3) * refined_limit_ + 1;
+  const size_t slots = pool_slots_;
+  const size_t floats = slots * slopes_.size() * segment_;
+  AlignedCosts costs(floats, prior_), reverse(bidirectional_ ? floats : 0, prior_);
+  free_slots_.clear();
+  for (size_t s = slots; s-- > 0;)
+    free_slots_.push_back(static_cast<int32_t>(s));
+  const size_t run = slopes_.size() * segment_;  // a slot: every pace's segment
+  for (size_t k = 0; k < refined_.size(); ++k)
+  {
+    if (!refined_[k] || !stale_[k].empty())
+    {
+      slot_[k] = -1;
+      stale_[k] = Stale{0, kChunk};
+      continue;
+    }
+    const int32_t s = free_slots_.back();
+    free_slots_.pop_back();
+    std::copy_n(costs_.begin() + static_cast<long>(k * run), run, costs.begin() + static_cast<long>(size_t(s) * run));
+    if (bidirectional_)
+      std::copy_n(reverse_.begin() + static_cast<long>(k * run), run,
+                  reverse.begin() + static_cast<long>(size_t(s) * run));
+    slot_[k] = s;
+  }
+  costs_.swap(costs);
+  reverse_.swap(reverse);
+  pooled_ = true;
+}
+
+void PaceMatcher::unpool()
+{
+  const size_t chunks = refined_.size(), run = slopes_.size() * segment_;
+  AlignedCosts costs(chunks * run, prior_), reverse(bidirectional_ ? chunks * run : 0, prior_);
+  for (size_t k = 0; k < chunks; ++k)
+  {
+    if (slot_[k] >= 0)
+    {
+      std::copy_n(costs_.begin() + static_cast<long>(size_t(slot_[k]) * run), run,
+                  costs.begin() + static_cast<long>(k * run));
+      if (bidirectional_)
+        std::copy_n(reverse_.begin() + static_cast<long>(size_t(slot_[k]) * run), run,
+                    reverse.begin() + static_cast<long>(k * run));
+    }
+    else
+      stale_[k] = Stale{0, kChunk};
+    slot_[k] = static_cast<int32_t>(k);
+  }
+  costs_.swap(costs);
+  reverse_.swap(reverse);
+  free_slots_.clear();
+  pooled_ = false;
+  pool_slots_ = 0;
+}
+
+void PaceMatcher::rekeyPool(size_t front, size_t size)
+{
+  // New chunk k's places were places [off, kChunk) of old chunk a and then the first of old chunk a + 1: it takes a's
+  // slot, moved down by off, and the rest from a + 1's slot before that one moves in turn (chunks in order).
+  const size_t kept = std::min(size, columns_ - std::min(front, columns_));
+  const size_t chunks = (size + kChunk - 1) / kChunk, old_chunks = slot_.size();
+  std::vector<int32_t> slots(chunks, -1);
+  for (size_t k = 0; k < chunks && k * kChunk < kept; ++k)
+  {
+    const size_t from = k * kChunk + front, a = from / kChunk, off = from % kChunk;
+    if (a >= old_chunks || slot_[a] < 0)
+      continue;
+    const int32_t s = slot_[a];
+    slots[k] = s;
+    const size_t old_places = std::min(kept - k * kChunk, kChunk);
+    const size_t joined = std::min(kChunk, size - k * kChunk);
+    for (AlignedCosts* buffer : {&costs_, &reverse_})
+    {
+      if (buffer->empty())
+        continue;
+      for (size_t v = 0; v < slopes_.size(); ++v)
+      {
+        int16_t* own = slotSegment(*buffer, size_t(s), v);
+        std::copy(own + off, own + kChunk, own);
+        if (kChunk - off < old_places && a + 1 < old_chunks && slot_[a + 1] >= 0)
+          std::copy_n(slotSegment(*buffer, size_t(slot_[a + 1]), v), old_places - (kChunk - off), own + kChunk - off);
+        std::fill(own + old_places, own + std::max(old_places, joined), prior_);
+      }
+    }
+  }
+  // Every slot no chunk took is free again; a chunk without one is screened out (stale).
+  std::vector<uint8_t> taken(pool_slots_, 0);
+  for (int32_t s : slots)
+    if (s >= 0)
+      taken[size_t(s)] = 1;
+  free_slots_.clear();
+  for (size_t s = pool_slots_; s-- > 0;)
+    if (!taken[s])
+      free_slots_.push_back(static_cast<int32_t>(s));
+  slot_.swap(slots);
+  for (size_t k = 0; k < chunks; ++k)
+    if (slot_[k] < 0)
+      stale_[k] = Stale{0, kChunk};
+}
+
 int16_t PaceMatcher::costAt(size_t column, size_t pace) const
 {
-  return current(pace)[(column / kChunk * slopes_.size() + pace) * segment_ + margin_ + column % kChunk];
+  return current(pace)[(size_t(slot_[column / kChunk]) * slopes_.size() + pace) * segment_ + margin_ + column % kChunk];
 }
 
 size_t PaceMatcher::refinedColumn(size_t column) const
