@@ -21,6 +21,7 @@ struct Chunk;
 struct ChunkSums;
 struct ScreenChunk;
 struct ScreenSums;
+struct PaceRow;
 }  // namespace pace_kernels
 
 /// Sequence matching at any pace: the revisit may advance from 1 / max_pace to max_pace places of the
@@ -203,6 +204,9 @@ private:
   bool enoughEvidence(int min_terms) const;
   /// refined_ for this frame's `chunks` chunks, from the previous frame's screen (screen_minimum_).
   void chooseRefined(size_t chunks);
+  /// Before the kernel updates refined chunk `k` (m places) of `chunks`: its stale places started from the screen, its
+  /// segments' padding, each pace's rows, and the last frame's M of its neighbours that were screened out.
+  void prepareChunk(size_t k, size_t chunks, size_t m, std::vector<pace_kernels::PaceRow>& rows);
   /// Every pace's costs of chunk `chunk`'s stale places start from their screen costs of the last frame.
   void startFromScreen(size_t chunk);
   /// Keeps a buffer of costs aligned: drops `front` evicted places, keeps `size` places, new ones at `prior`.

@@ -416,40 +416,8 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   {
     chunk.begin = k * kChunk;
     chunk.m = std::min(kChunk, n - chunk.begin);
-    if (refined_[k] && !stale_[k].empty())
-      startFromScreen(k);
-    // A place's screen cost of the last frame as a path's (screenedCost), where a chunk's costs are not the last
-    // frame's.
-    const auto screened = [&](size_t place) { return screenedCost(old_screen_[pad_ + place]); };
-    // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the last
-    // places of the chunk before, copied before that chunk was updated in place; reverse, the first places of the
-    // chunk after, in the buffer that is only read. Only refined chunks have segments (a slot).
-    const bool next = k + 1 < chunks && refined_[k + 1];
-    for (size_t v = 0; v < paces; ++v)
-    {
-      AlignedCosts& from = current(v);
-      int16_t* own = refined_[k] ? segment(from, k, v) : nullptr;
-      const bool forward = slopes_[v].first > 0;
-      for (size_t q = 1; q <= pad_; ++q)
-        if (forward)
-        {
-          if (k == 0 && own)
-            own[-static_cast<long>(q)] = prior_;
-          if (next)
-            segment(from, k + 1, v)[-static_cast<long>(q)] =
-                own && !stale_[k].holds(kChunk - q) ? own[kChunk - q] : screened((k + 1) * kChunk - q);
-        }
-        else if (own && k + 1 < chunks)
-          own[chunk.m + q - 1] =
-              next && !stale_[k + 1].holds(q - 1) ? segment(from, k + 1, v)[q - 1] : screened((k + 1) * kChunk + q - 1);
-        else if (own)
-          own[chunk.m + q - 1] = prior_;
-      if (own)
-      {
-        rows[v].from = own;
-        rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
-      }
-    }
+    if (refined_[k])
+      prepareChunk(k, chunks, chunk.m, rows);
     distances(query, shifted, views, reference, chunk.begin, chunk.m);
     screen.begin = chunk.begin;
     screen.m = chunk.m;
@@ -459,15 +427,6 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
     square_sum += screened_sums.squares;
     if (refined_[k])
     {
-      // The places a path comes from beyond the chunk (pad_ on each side) in a chunk that was screened last frame:
-      // their M of the last frame is their screen cost as a path's.
-      for (size_t q = 1; q <= pad_; ++q)
-      {
-        if (k > 0 && stale_[k - 1].holds(kChunk - q))
-          old_best_[pad_ + k * kChunk - q] = screened(k * kChunk - q);
-        if (k + 1 < chunks && stale_[k + 1].holds(q - 1))
-          old_best_[pad_ + (k + 1) * kChunk + q - 1] = screened((k + 1) * kChunk + q - 1);
-      }
       const pace_kernels::ChunkSums sums = kernel_(chunk);
       chunk_minimum_[k] = prior_active_ ? costOf(sums.searched_minimum) : costOf(sums.minimum);
       if (screening)
@@ -489,6 +448,48 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   const double squares = static_cast<double>(square_sum) / static_cast<double>(n) / (max_distance * max_distance);
   prior_ = static_cast<int16_t>(std::lround(std::min(1.0, mean) * pace_kernels::kOne));
   spread_ = static_cast<float>(std::sqrt(std::max(0.0, squares - mean * mean)));
+}
+
+void PaceMatcher::prepareChunk(size_t k, size_t chunks, size_t m, std::vector<pace_kernels::PaceRow>& rows)
+{
+  if (!stale_[k].empty())
+    startFromScreen(k);
+  // A place's screen cost of the last frame as a path's (screenedCost), where a chunk's costs are not the last frame's.
+  const auto screened = [&](size_t place) { return screenedCost(old_screen_[pad_ + place]); };
+  // A segment's padding holds the previous costs of the places a pace reads beyond the chunk. Forward, the last places
+  // of the chunk before: a refined chunk copies its own into the next one's padding before it is updated in place
+  // (here), and a chunk screened out has none, so its screen costs stand in. Reverse, the first places of the chunk
+  // after, in the buffer that is only read (or their screen costs).
+  const bool before = k > 0 && refined_[k - 1], after = k + 1 < chunks && refined_[k + 1];
+  for (size_t v = 0; v < slopes_.size(); ++v)
+  {
+    AlignedCosts& from = current(v);
+    int16_t* own = segment(from, k, v);
+    const bool forward = slopes_[v].first > 0;
+    for (size_t q = 1; q <= pad_; ++q)
+      if (forward)
+      {
+        if (k == 0 || !before)
+          own[-static_cast<long>(q)] = k == 0 ? prior_ : screened(k * kChunk - q);
+        if (after)
+          segment(from, k + 1, v)[-static_cast<long>(q)] = own[kChunk - q];  // (stale_[k] is empty by now)
+      }
+      else
+        own[m + q - 1] = k + 1 == chunks                        ? prior_
+                         : after && !stale_[k + 1].holds(q - 1) ? segment(from, k + 1, v)[q - 1]
+                                                                : screened((k + 1) * kChunk + q - 1);
+    rows[v].from = own;
+    rows[v].to = forward ? own : segment(&from == &costs_ ? reverse_ : costs_, k, v);
+  }
+  // M of the last frame of the places a path comes from beyond the chunk, where it was screened out: its screen cost
+  // as a path's.
+  for (size_t q = 1; q <= pad_; ++q)
+  {
+    if (k > 0 && stale_[k - 1].holds(kChunk - q))
+      old_best_[pad_ + k * kChunk - q] = screened(k * kChunk - q);
+    if (k + 1 < chunks && stale_[k + 1].holds(q - 1))
+      old_best_[pad_ + (k + 1) * kChunk + q - 1] = screened((k + 1) * kChunk + q - 1);
+  }
 }
 
 size_t PaceMatcher::chunksOf(size_t places)
