@@ -856,6 +856,15 @@ cv::Mat viewOf(const cv::Mat& panorama, int heading)
     panorama(cv::Rect((heading + x) % panorama.cols, top, 1, height)).copyTo(view.col(x));
   return view;
 }
+
+/// Three turns of a camera turning on the spot, `step` pixels of the panorama's heading a frame.
+std::vector<cv::Mat> turningCamera(const cv::Mat& panorama, int step)
+{
+  std::vector<cv::Mat> views;
+  for (int t = 0; t < 3 * panorama.cols / step; ++t)
+    views.push_back(viewOf(panorama, t * step));
+  return views;
+}
 }  // namespace
 
 // Issue 20's bad input: a camera that only rotates in place (a robot spinning on the spot), from a real
@@ -868,10 +877,9 @@ TEST(PacedStreams, ACameraThatOnlyRotatesInPlacePublishesOnlyLoopsFacingTheSameW
 {
   const cv::Mat panorama = cv::imread(openable_test::sharedData("panoramic/streetview_pairs/2_1.jpg"), cv::IMREAD_COLOR);
   ASSERT_FALSE(panorama.empty());
-  const int step = 7, frames = 3 * panorama.cols / step;
-  std::vector<cv::Mat> views;
-  for (int t = 0; t < frames; ++t)
-    views.push_back(viewOf(panorama, t * step));
+  const int step = 7;
+  const std::vector<cv::Mat> views = turningCamera(panorama, step);
+  const int frames = static_cast<int>(views.size());
   for (const std::string name : {"default", "gardens_point"})
   {
     const std::vector<FrameOutcome> outcomes = settledOutcomes(views, shippedAtAnyPace(name));
@@ -910,10 +918,9 @@ TEST(PacedStreams, ShiftedViewsOfACameraRotatingInPlaceSayWhichWayEachMatchFaces
 {
   const cv::Mat panorama = cv::imread(openable_test::sharedData("panoramic/streetview_pairs/2_1.jpg"), cv::IMREAD_COLOR);
   ASSERT_FALSE(panorama.empty());
-  const int step = 7, frames = 3 * panorama.cols / step;
-  std::vector<cv::Mat> views;
-  for (int t = 0; t < frames; ++t)
-    views.push_back(viewOf(panorama, t * step));
+  const int step = 7;
+  const std::vector<cv::Mat> views = turningCamera(panorama, step);
+  const int frames = static_cast<int>(views.size());
   Config config = shippedAtAnyPace("default");
   config.lateral_shift = 0.12;
   const int margin = static_cast<int>(std::lround(config.lateral_shift * views[0].cols));  // pixels of heading
