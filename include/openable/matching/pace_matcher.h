@@ -58,12 +58,13 @@ struct PaceRow;
 /// place also keeps one screen cost, a path that may take any step of 0 to max_pace places a frame for free
 /// (pace_kernels::ScreenChunk; 2 bytes a place read and written), and only the chunks whose smallest screen cost
 /// ranks among the first 16 of the previous frame, each with the chunk after it (where a forward path goes on), and
-/// those refined the frame before that still rank among the first 32, keep and update every pace's costs. A chunk
-/// that starts to be refined starts every pace from its places' screen costs, raised by how far a refined place's
-/// cost lay above its screen cost on average (the screen's paths may zig-zag: lower, most of all where nothing
-/// matches). Candidates come from refined chunks only. A frame then moves the descriptors and 4 bytes a place, plus
-/// every pace's costs of at most 48 chunks; a row of up to 64 chunks is refined whole, as without the screen (below
-/// that the screen saves too little: at 100,000 places, 49 chunks, it would refine most of them anyway).
+/// those refined the frame before that still rank among the first 32, keep and update every pace's costs, in a pool
+/// of slots (49 chunks' costs, not every chunk's). At most 4 chunks start to be refined in a frame; each starts every
+/// pace from its places' screen costs, raised by how far a refined place's cost lay above its screen cost on average
+/// (the screen's paths may zig-zag: lower, most of all where nothing matches). Candidates come from refined chunks
+/// only. A frame then moves the descriptors and 4 bytes a place, plus every pace's costs of at most 48 chunks; a row
+/// of up to 64 chunks is refined whole, as without the screen (below that the screen saves too little: at 100,000
+/// places, 49 chunks, it would refine most of them anyway).
 ///
 /// The kernels of a frame's update; each one gives the same numbers (kBest: the fastest this CPU runs).
 enum class PaceKernel
