@@ -203,8 +203,9 @@ private:
   bool isRefined(size_t column) const;
   /// At least min_terms (at most L) frames matched since the last reset.
   bool enoughEvidence(int min_terms) const;
-  /// refined_ for this frame's `chunks` chunks, from the previous frame's screen (screen_minimum_).
-  void chooseRefined(size_t chunks);
+  /// refined_ for this frame's `chunks` chunks, from the previous frame's screen (screen_minimum_); whether any is
+  /// screened out.
+  bool chooseRefined(size_t chunks);
   /// Before the kernel updates refined chunk `k` (m places) of `chunks`: its stale places started from the screen, its
   /// segments' padding, each pace's rows, and the last frame's M of its neighbours that were screened out.
   void prepareChunk(size_t k, size_t chunks, size_t m, std::vector<pace_kernels::PaceRow>& rows);
@@ -224,7 +225,7 @@ private:
   }
   /// While screening, the buffers hold a pool of slots, one for each refined chunk; otherwise one slot for every
   /// chunk, in order. These switch between the two (after chooseRefined): refined chunks keep their costs.
-  void placeRefinedChunks();
+  void placeRefinedChunks(bool screening);
   void pool();
   void unpool();
   /// align() of a pooled row: `front` evicted places leave, every refined chunk's costs move with its places.

@@ -19,7 +19,6 @@ namespace
 constexpr size_t kChunk = 2048;
 /// The cost of a path that does not exist (before the first place): never the minimum, never overflows.
 constexpr float kNoPath = 1e30f;
-constexpr int64_t kOneCost = pace_kernels::kOne;
 
 /// The paces of max_pace as fractions p / 60 (places per frame), slowest first: from 1 / max_pace to max_pace
 /// in steps of a factor kPaceStep, 1 exactly among them. Between two neighbours a straight line drifts by one
@@ -312,8 +311,8 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   const size_t n = columns_;
   const size_t chunks = (n + kChunk - 1) / kChunk;
   chunk_minimum_.assign(chunks, kNoPath);
-  chooseRefined(chunks);
-  placeRefinedChunks();
+  const bool screening = chooseRefined(chunks);
+  placeRefinedChunks(screening);
   if (n == 0)
     return;
   const uint64_t t = queries_++;
@@ -408,7 +407,6 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   screen.old_screen = old_screen_.data() + pad_;
   screen.screen = screen_.data() + pad_;
   uint64_t distance_sum = 0, square_sum = 0;
-  const bool screening = std::find(refined_.begin(), refined_.end(), 0) != refined_.end();
   int64_t above_screen = 0;
   size_t refined_places = 0;
   // Chunk by chunk in the order of memory (the prefetchers follow it; backwards, a frame took twice as long).
@@ -439,7 +437,8 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   // are lower, most of all where nothing matches): a chunk refined next frame starts that much above its screen,
   // typical for its rank rather than better than every path already followed.
   if (screening && refined_places > 0)
-    screen_offset_ = static_cast<int16_t>(std::clamp<int64_t>(above_screen / int64_t(refined_places), 0, kOneCost));
+    screen_offset_ =
+        static_cast<int16_t>(std::clamp<int64_t>(above_screen / int64_t(refined_places), 0, pace_kernels::kOne));
   // A chunk left out this frame keeps costs of an older one.
   for (size_t k = 0; k < chunks; ++k)
     stale_[k] = refined_[k] ? Stale{} : Stale{0, kChunk};
@@ -497,12 +496,12 @@ size_t PaceMatcher::chunksOf(size_t places)
   return (places + kChunk - 1) / kChunk;
 }
 
-void PaceMatcher::chooseRefined(size_t chunks)
+bool PaceMatcher::chooseRefined(size_t chunks)
 {
   refined_.assign(chunks, 1);
   screen_minimum_.resize(chunks, INT16_MAX);  // a chunk that joined the row has no screen cost yet
   if (screen_chunks_ == 0 || chunks <= screen_chunks_)
-    return;
+    return false;
   // The chunks with the smallest screen costs of the last frame and the chunk after each (a forward path goes on into
   // it; the one before too with bidirectional), and those refined the frame before that still rank among twice as
   // many: a chunk near the limit does not start again from its screen costs every other frame. At most a quarter of
@@ -542,6 +541,7 @@ void PaceMatcher::chooseRefined(size_t chunks)
     else if (wasRefined(k))
       refined_[k] = 1;
   }
+  return true;
 }
 
 void PaceMatcher::startFromScreen(size_t chunk)
@@ -572,9 +572,8 @@ bool PaceMatcher::isRefined(size_t column) const
   return column / kChunk < refined_.size() && refined_[column / kChunk];
 }
 
-void PaceMatcher::placeRefinedChunks()
+void PaceMatcher::placeRefinedChunks(bool screening)
 {
-  const bool screening = std::find(refined_.begin(), refined_.end(), 0) != refined_.end();
   if (!screening)
   {
     if (pooled_)
@@ -611,11 +610,10 @@ void PaceMatcher::pool()
   // chooseRefined refines at most the limit's chunks, the one after each (and before, both ways) and as many again
   // that were refined: a slot for each, where a row refined whole kept a slot for every chunk (340 MB at 1e7 places).
   pool_slots_ = (bidirectional_ ? 4 : 3) * refined_limit_ + 1;
-  const size_t slots = pool_slots_;
-  const size_t floats = slots * slopes_.size() * segment_;
+  const size_t floats = pool_slots_ * slopes_.size() * segment_;
   AlignedCosts costs(floats, prior_), reverse(bidirectional_ ? floats : 0, prior_);
   free_slots_.clear();
-  for (size_t s = slots; s-- > 0;)
+  for (size_t s = pool_slots_; s-- > 0;)
     free_slots_.push_back(static_cast<int32_t>(s));
   const size_t run = slopes_.size() * segment_;  // a slot: every pace's segment
   for (size_t k = 0; k < refined_.size(); ++k)
