@@ -1,9 +1,10 @@
 // PaceMatcher on a large row (pace_matcher.h): which chunks keep every pace's costs this frame (the screen ranks
 // them), the pool of slots that holds those costs, and each refined chunk's preparation before the kernel runs.
+#include "openable/matching/pace_matcher.h"
+
 #include <algorithm>
 #include <vector>
 
-#include "openable/matching/pace_matcher.h"
 #include "pace_chunks.h"
 #include "pace_kernels.h"
 
