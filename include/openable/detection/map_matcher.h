@@ -80,7 +80,7 @@ struct MatchOptions
   int max_pace;  ///< 1: the paper's sequences (SequenceMatcher); more: PaceMatcher
   double pace_penalty;
   int pace_tolerance;
-  int screen_places;  ///< PaceMatcher: a row of more places is screened (0 = never)
+  int screen_places;         ///< PaceMatcher: a row of more places is screened (0 = never)
   double slip_penalty;       ///< a fraction of pace_penalty (PaceMatcher)
   double pace_prior;         ///< a fraction of pace_penalty (PaceMatcher), while searching
   int exclusion_window;      ///< own-session frames too recent to be candidates

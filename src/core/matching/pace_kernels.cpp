@@ -13,15 +13,13 @@ ChunkSums chunkPortable(const Chunk& chunk)
 {
   ChunkSums sums;
   for (size_t i = 0; i < chunk.m; ++i)
-    prepare(chunk, i, sums);
+    prepare(chunk, i);
   // The last place first: a forward row is updated in place, and a place reads the places before it.
   for (size_t i = chunk.m; i-- > 0;)
     update(chunk, i, sums);
   return sums;
 }
 
-namespace
-{
 bool supported(PaceKernel kernel)
 {
   switch (kernel)
@@ -42,6 +40,8 @@ bool supported(PaceKernel kernel)
   }
 }
 
+namespace
+{
 ChunkFn fastest(long reach)
 {
 #if defined(__x86_64__) || defined(__i386__)

@@ -79,12 +79,10 @@ inline uint16_t* searchedOf(const Chunk& c)
   return c.searched ? c.searched + c.begin : nullptr;
 }
 
-/// Sums over the chunk's own distances (the row's mean and spread give the next frame its prior and its change
-/// cost), in integers so that they do not depend on the kernel.
+/// What a chunk kernel leaves for smallestDistinct(): the chunk's smallest costs (the row's mean and spread come from
+/// the screen's sums, ScreenSums, which every chunk computes).
 struct ChunkSums
 {
-  uint64_t sum = 0;
-  uint64_t squares = 0;
   int16_t minimum = kOne;                  ///< the smallest M of the chunk
   uint16_t searched_minimum = UINT16_MAX;  ///< the smallest Chunk::searched of the chunk (while searching)
 };
@@ -108,6 +106,8 @@ constexpr long kAvx512Reach = 32;
 /// The kernel for `kernel` whose rows read up to `reach` places behind (max_pace + 1): kBest is the fastest this
 /// CPU runs that reaches that far. Throws Error when the CPU cannot run `kernel` or it does not reach.
 ChunkFn kernelFor(PaceKernel kernel, long reach);
+/// Whether this CPU runs `kernel` (kBest and kPortable: always).
+bool supported(PaceKernel kernel);
 
 /// One chunk of places of the screen (pace_screen.cpp): a cost a place, the entry of its own frame distance plus a
 /// times the smallest screen cost of the places a path could have come from in one frame (0 to `reach` places
@@ -166,13 +166,11 @@ inline int16_t entryOf(uint32_t r, float scale)
   return static_cast<int16_t>(std::nearbyint(x));
 }
 
-/// The entry terms of place i of the chunk; adds its own distance to the sums. The vector kernels' tails.
-inline void prepare(const Chunk& c, size_t i, ChunkSums& sums)
+/// The entry terms of place i of the chunk. The vector kernels' tails.
+inline void prepare(const Chunk& c, size_t i)
 {
   const uint32_t* own = c.raw + c.tolerance;
   const uint32_t r = own[i];
-  sums.sum += r;
-  sums.squares += static_cast<uint64_t>(r) * r;
   uint32_t nearest = r;
   for (long k = 1; k <= c.tolerance; ++k)
     nearest = std::min({nearest, own[static_cast<long>(i) - k], own[static_cast<long>(i) + k]});

@@ -233,10 +233,9 @@ __attribute__((target("avx2"))) inline void paces256(const Chunk& c, int16_t* be
 __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c)
 {
   ChunkSums sums;
-  // Entry terms and sums, 16 places a vector; lanes past the chunk load as 0 and are not stored.
+  // Entry terms, 16 places a vector; lanes past the chunk load as 0 and are not stored.
   const uint32_t* own = c.raw + c.tolerance;
   const __m512 scale = _mm512_set1_ps(c.entry_scale);
-  __m512i sum = _mm512_setzero_si512(), squares = _mm512_setzero_si512();
   for (size_t i = 0; i < c.m; i += 16)
   {
     const __mmask16 mask = c.m - i >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << (c.m - i)) - 1);
@@ -249,13 +248,7 @@ __attribute__((target("avx512f,avx512bw"))) ChunkSums chunkAvx512(const Chunk& c
     const __m256i extra = _mm256_sub_epi16(entries512(r, scale), entry);
     _mm512_mask_storeu_epi16(c.entry + i, __mmask32(mask), _mm512_castsi256_si512(entry));
     _mm512_mask_storeu_epi16(c.extra + i, __mmask32(mask), _mm512_castsi256_si512(extra));
-    const __m512i low = _mm512_cvtepu32_epi64(_mm512_castsi512_si256(r));
-    const __m512i high = _mm512_cvtepu32_epi64(_mm512_extracti64x4_epi64(r, 1));
-    sum = _mm512_add_epi64(sum, _mm512_add_epi64(low, high));
-    squares = _mm512_add_epi64(squares, _mm512_add_epi64(_mm512_mul_epu32(low, low), _mm512_mul_epu32(high, high)));
   }
-  sums.sum = static_cast<uint64_t>(_mm512_reduce_add_epi64(sum));
-  sums.squares = static_cast<uint64_t>(_mm512_reduce_add_epi64(squares));
   // M' + change once per offset (several paces advance the same places this frame), then pace by pace over
   // the chunk (one run of 64-byte lines of each row), in the order of memory.
   const size_t m = c.m, whole = m - m % 32;
@@ -320,7 +313,6 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
   ChunkSums sums;
   const uint32_t* own = c.raw + c.tolerance;
   const __m256 scale = _mm256_set1_ps(c.entry_scale);
-  __m256i sum = _mm256_setzero_si256(), squares = _mm256_setzero_si256();
   size_t i = 0;
   for (; i + 8 <= c.m; i += 8)
   {
@@ -333,18 +325,9 @@ __attribute__((target("avx2"))) ChunkSums chunkAvx2(const Chunk& c)
     const __m128i entry = entries256(nearest, scale);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(c.entry + i), entry);
     _mm_storeu_si128(reinterpret_cast<__m128i*>(c.extra + i), _mm_sub_epi16(entries256(r, scale), entry));
-    const __m256i low = _mm256_cvtepu32_epi64(_mm256_castsi256_si128(r));
-    const __m256i high = _mm256_cvtepu32_epi64(_mm256_extracti128_si256(r, 1));
-    sum = _mm256_add_epi64(sum, _mm256_add_epi64(low, high));
-    squares = _mm256_add_epi64(squares, _mm256_add_epi64(_mm256_mul_epu32(low, low), _mm256_mul_epu32(high, high)));
   }
-  alignas(32) uint64_t lanes[4];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), sum);
-  sums.sum = lanes[0] + lanes[1] + lanes[2] + lanes[3];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), squares);
-  sums.squares = lanes[0] + lanes[1] + lanes[2] + lanes[3];
   for (; i < c.m; ++i)
-    prepare(c, i, sums);
+    prepare(c, i);
   // The partial block at the top place by place, then pace by pace over the whole blocks of 16, downwards.
   const size_t whole = c.m - c.m % 16;
   for (size_t k = c.m; k-- > whole;)

@@ -170,9 +170,9 @@ void PaceMatcher::resizeCosts(AlignedCosts& costs, size_t front, size_t size)
   // time, read and write at half the speed: the memory's row buffers and the prefetchers lose track).
   const size_t paces = slopes_.size();
   const size_t kept = std::min(size, columns_ - std::min(front, columns_));
-  const size_t chunks = (size + kChunk - 1) / kChunk;
+  const size_t chunks = chunksOf(size);
   // One slot a chunk, in order, for the old layout and the new (resizeAll trims slot_ after).
-  for (size_t k = slot_.size(); k < std::max(chunks, (columns_ + kChunk - 1) / kChunk); ++k)
+  for (size_t k = slot_.size(); k < std::max(chunks, chunksOf(columns_)); ++k)
     slot_.push_back(static_cast<int32_t>(k));
   if (front > 0 && kept > 0)
   {
@@ -223,7 +223,7 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
     // one chunk of the last frame, the rest from the next, so what is stale is one end of it or all of it.
     const size_t kept = std::min(size, columns_ - std::min(front, columns_));
     const auto wasValid = [this](size_t old_chunk) { return old_chunk >= stale_.size() || stale_[old_chunk].empty(); };
-    std::vector<Stale> stale((size + kChunk - 1) / kChunk);
+    std::vector<Stale> stale(chunksOf(size));
     for (size_t k = 0; k < stale.size() && k * kChunk < kept; ++k)
     {
       const size_t from = k * kChunk + front;       // where the chunk's first place was
@@ -256,7 +256,7 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
       resizeCosts(costs_, front, size);
       if (bidirectional_)
         resizeCosts(reverse_, front, size);
-      slot_.resize((size + kChunk - 1) / kChunk);
+      slot_.resize(chunksOf(size));
     }
     resize(best_, front, size);
   };
@@ -308,7 +308,7 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
   const bool first_row = columns_ == 0;
   align(reference, candidates);
   const size_t n = columns_;
-  const size_t chunks = (n + kChunk - 1) / kChunk;
+  const size_t chunks = chunksOf(n);
   chunk_minimum_.assign(chunks, kNoPath);
   const bool screening = chooseRefined(chunks);
   placeRefinedChunks(screening);

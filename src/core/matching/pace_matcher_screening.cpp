@@ -225,7 +225,7 @@ void PaceMatcher::rekeyPool(size_t front, size_t size)
   // New chunk k's places were places [off, kChunk) of old chunk a and then the first of old chunk a + 1: it takes a's
   // slot, moved down by off, and the rest from a + 1's slot before that one moves in turn (chunks in order).
   const size_t kept = std::min(size, columns_ - std::min(front, columns_));
-  const size_t chunks = (size + kChunk - 1) / kChunk, old_chunks = slot_.size();
+  const size_t chunks = chunksOf(size), old_chunks = slot_.size();
   std::vector<int32_t> slots(chunks, -1);
   for (size_t k = 0; k < chunks && k * kChunk < kept; ++k)
   {

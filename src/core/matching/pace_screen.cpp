@@ -1,7 +1,9 @@
 // PaceMatcher's screen: one cost a place for every place of a large row (pace_kernels.h ScreenChunk). The portable
 // loop, and on x86 AVX2 and AVX-512BW versions chosen at run time; all three compute the same integers.
 #include <algorithm>
+#include <string>
 
+#include "openable/error.h"
 #include "pace_kernels.h"
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -142,23 +144,19 @@ __attribute__((target("avx2"))) ScreenSums screenAvx2(const ScreenChunk& c)
 
 ScreenFn screenFor(PaceKernel kernel)
 {
-  // The same CPU checks as the chunk kernels' (kernelFor throws first where the CPU lacks the one asked for).
-  const ChunkFn chunk = kernelFor(kernel, 1);
-  (void)chunk;
+  if (!supported(kernel))
+    throw Error("pace kernel " + paceKernelName(kernel) + " is not supported by this CPU");
   switch (kernel)
   {
-    case PaceKernel::kPortable:
-      return screenPortable;
 #if defined(__x86_64__) || defined(__i386__)
     case PaceKernel::kAvx2:
       return screenAvx2;
     case PaceKernel::kAvx512:
       return screenAvx512;
     case PaceKernel::kBest:
-      __builtin_cpu_init();
-      if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw"))
-        return screenAvx512;
-      return __builtin_cpu_supports("avx2") ? screenAvx2 : screenPortable;
+      return supported(PaceKernel::kAvx512) ? screenAvx512
+             : supported(PaceKernel::kAvx2) ? screenAvx2
+                                            : screenPortable;
 #endif
     default:
       return screenPortable;
