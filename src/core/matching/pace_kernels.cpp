@@ -54,10 +54,15 @@ ChunkFn fastest(long reach)
 }
 }  // namespace
 
-ChunkFn kernelFor(PaceKernel kernel, long reach)
+void requireSupported(PaceKernel kernel)
 {
   if (!supported(kernel))
     throw Error("pace kernel " + paceKernelName(kernel) + " is not supported by this CPU");
+}
+
+ChunkFn kernelFor(PaceKernel kernel, long reach)
+{
+  requireSupported(kernel);
   if (kernel == PaceKernel::kAvx512 && reach > kAvx512Reach)
     throw Error("the avx512bw pace kernel reads up to " + std::to_string(kAvx512Reach) + " places behind; max_pace " +
                 std::to_string(reach - 1) + " needs " + std::to_string(reach));

@@ -108,6 +108,8 @@ constexpr long kAvx512Reach = 32;
 ChunkFn kernelFor(PaceKernel kernel, long reach);
 /// Whether this CPU runs `kernel` (kBest and kPortable: always).
 bool supported(PaceKernel kernel);
+/// Throws Error naming `kernel` when this CPU cannot run it (kernelFor and screenFor check the same way).
+void requireSupported(PaceKernel kernel);
 
 /// One chunk of places of the screen (pace_screen.cpp): a cost a place, the entry of its own frame distance plus a
 /// times the smallest screen cost of the places a path could have come from in one frame (0 to `reach` places

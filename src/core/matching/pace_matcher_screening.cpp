@@ -168,8 +168,8 @@ void PaceMatcher::pool()
   // chooseRefined refines at most the limit's chunks, the one after each (and before, both ways) and as many again
   // that were refined: a slot for each, where a row refined whole kept a slot for every chunk (340 MB at 1e7 places).
   pool_slots_ = (bidirectional_ ? 4 : 3) * refined_limit_ + 1;
-  const size_t floats = pool_slots_ * slopes_.size() * segment_;
-  AlignedCosts costs(floats, prior_), reverse(bidirectional_ ? floats : 0, prior_);
+  const size_t entries = pool_slots_ * slopes_.size() * segment_;  // int16 costs: every pace's segment of every slot
+  AlignedCosts costs(entries, prior_), reverse(bidirectional_ ? entries : 0, prior_);
   free_slots_.clear();
   for (size_t s = pool_slots_; s-- > 0;)
     free_slots_.push_back(static_cast<int32_t>(s));

@@ -1,9 +1,7 @@
 // PaceMatcher's screen: one cost a place for every place of a large row (pace_kernels.h ScreenChunk). The portable
 // loop, and on x86 AVX2 and AVX-512BW versions chosen at run time; all three compute the same integers.
 #include <algorithm>
-#include <string>
 
-#include "openable/error.h"
 #include "pace_kernels.h"
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -144,8 +142,7 @@ __attribute__((target("avx2"))) ScreenSums screenAvx2(const ScreenChunk& c)
 
 ScreenFn screenFor(PaceKernel kernel)
 {
-  if (!supported(kernel))
-    throw Error("pace kernel " + paceKernelName(kernel) + " is not supported by this CPU");
+  requireSupported(kernel);
   switch (kernel)
   {
 #if defined(__x86_64__) || defined(__i386__)
