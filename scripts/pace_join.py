@@ -19,6 +19,8 @@ import os
 import subprocess
 import tempfile
 
+import pace_sets  # this folder: the rows and totals it prints
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -78,15 +80,10 @@ def main():
             key = relative.replace(os.sep, ' ')
             results[key] = score(args.bin, loops_csv, os.path.dirname(os.path.dirname(first_csv)),
                                  os.path.join(work, 'eval'))
-            print('%-40s published %5d  wrong %4d  recall %.3f' % (key, *results[key]), flush=True)
+            pace_sets.print_row(key, *results[key])
     if not results:
         raise SystemExit('pace_join: no runs in %s (pace_sets.py without --clean keeps them)' % args.first)
-    print('joined: %d streams, published %d / wrong %d / summed recall %.2f' % (
-        len(results), sum(r[0] for r in results.values()), sum(r[1] for r in results.values()),
-        sum(r[2] for r in results.values())))
-    if args.json:
-        with open(args.json, 'w') as f:
-            json.dump(results, f, indent=0)
+    pace_sets.report('joined', results, args.json)
 
 
 if __name__ == '__main__':

@@ -75,6 +75,21 @@ def streams(which):
     return out
 
 
+def print_row(key, published, wrong, recall):
+    """One stream and profile's line (scripts/pace_join.py prints the same)."""
+    print('%-40s published %5d  wrong %4d  recall %.3f' % (key, published, wrong, recall), flush=True)
+
+
+def report(label, results, json_path=''):
+    """The totals of {key: [published, wrong, recall]}, and with json_path every row as JSON."""
+    print('%s: %d streams, published %d / wrong %d / summed recall %.2f' % (
+        label, len(results), sum(r[0] for r in results.values()), sum(r[1] for r in results.values()),
+        sum(r[2] for r in results.values())))
+    if json_path:
+        with open(json_path, 'w') as f:
+            json.dump(results, f, indent=0)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('which', choices=['pace', 'holdout', 'short', 'route40'])
@@ -93,15 +108,10 @@ def main():
                 args.set, start=start, frames=frames):
             key = '%s %s' % (name, profile)
             results[key] = [published, wrong, recall]
-            print('%-40s published %5d  wrong %4d  recall %.3f' % (key, published, wrong, recall), flush=True)
+            print_row(key, published, wrong, recall)
         if args.clean:
             shutil.rmtree(os.path.join(args.out, name), ignore_errors=True)
-    print('%s: %d streams, published %d / wrong %d / summed recall %.2f' % (
-        args.which, len(results), sum(r[0] for r in results.values()), sum(r[1] for r in results.values()),
-        sum(r[2] for r in results.values())))
-    if args.json:
-        with open(args.json, 'w') as f:
-            json.dump(results, f, indent=0)
+    report(args.which, results, args.json)
 
 
 if __name__ == '__main__':
