@@ -185,6 +185,30 @@ std::vector<ConfigProblem> Config::problems() const
   else if (descriptor_row->needs_disparity && !(camera_parsed && *camera_parsed == CameraType::Stereo))
     bad({"descriptor"}, descriptor,
         "a mono descriptor (" + descriptor + " describes disparity and needs camera_type stereo)");
+  const auto bitsOf = [&](const char* key, int bits)
+  {
+    if (bits == 0 || !descriptor_row)
+      return;
+    if (!descriptor_row->binary())
+      bad({key}, std::to_string(bits), "0 (" + descriptor + " is a float descriptor: it keeps every value)");
+    else if (bits > descriptor_row->length)
+      bad({key}, std::to_string(bits),
+          "0 (all) or at most the " + std::to_string(descriptor_row->length) + " bits of " + descriptor);
+  };
+  bitsOf("descriptor_bits", descriptor_bits);
+  bitsOf("view_channel_bits", view_channel_bits);
+  if (view_channel_shift > 0.0)
+  {
+    if (lateral_shift > 0.0)
+      bad({"view_channel_shift", "lateral_shift"}, formatDouble(view_channel_shift) + " / " + formatDouble(lateral_shift),
+          "one of them 0: the view channel matches shifted views beside the whole image, lateral_shift instead of it");
+    if (camera_parsed && *camera_parsed == CameraType::Panoramic)
+      bad({"view_channel_shift"}, formatDouble(view_channel_shift),
+          "0 with camera_type panoramic (a ring is matched at every rotation already)");
+    if (descriptor_row && descriptor_row->needs_disparity)
+      bad({"view_channel_shift"}, formatDouble(view_channel_shift),
+          "0 with " + descriptor + " (the disparity is not shifted with the image)");
+  }
   if (min_sequence_length > sequence_length && sequence_length >= 1)
     bad({"min_sequence_length"}, std::to_string(min_sequence_length),
         "an integer in [0, " + std::to_string(sequence_length) + "] (at most sequence_length)");
@@ -236,6 +260,19 @@ ValidConfig::ValidConfig(Config config) : config_(std::move(config))
   config_.validateOrThrow();
 }
 
+Config Config::viewChannel() const
+{
+  Config views = *this;
+  views.lateral_shift = view_channel_shift;
+  views.descriptor_bits = view_channel_bits;
+  if (view_channel_consistent_frames > 0)
+    views.consistent_frames = view_channel_consistent_frames;
+  views.view_channel_shift = 0.0;
+  views.view_channel_bits = 0;
+  views.view_channel_consistent_frames = 0;
+  return views;
+}
+
 Config Config::paper()
 {
   Config c;
@@ -244,6 +281,10 @@ Config Config::paper()
   c.min_uniqueness = 0.0;
   c.max_pace = 1;
   c.lateral_shift = 0.0;
+  c.descriptor_bits = 0;
+  c.view_channel_shift = 0.0;
+  c.view_channel_bits = 0;
+  c.view_channel_consistent_frames = 0;
   c.pace_tolerance = 1;
   c.slip_penalty = 0.0;
   c.pace_prior = 0.0;

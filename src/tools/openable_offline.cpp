@@ -218,8 +218,9 @@ int run(const Options& options)
   openable::Progress progress(localisation ? "openable_offline: query" : "openable_offline", stream.size(),
                               options.quiet);
   std::vector<std::vector<float>> rows;  // per stream file: distances by frame number (empty = not described)
-  // A panorama's circular shift, or a mono frame's view (lateral_shift): where the match faces, for a backend.
-  const bool with_shift = config.camera() == openable::CameraType::Panoramic || config.lateral_shift > 0.0;
+  // A panorama's circular shift, or a mono frame's view (lateral_shift, view_channel_shift): where the match faces.
+  const bool with_shift = config.camera() == openable::CameraType::Panoramic || config.lateral_shift > 0.0 ||
+                          config.view_channel_shift > 0.0;
   openable::LoopCsvWriter csv(with_shift);
   std::map<std::string, size_t> status_counts;
   size_t published = 0, truth_checked = 0, truth_hits = 0, published_correct = 0;

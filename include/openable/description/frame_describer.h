@@ -20,6 +20,10 @@ namespace openable
 /// (no extractor is built). Throws Error for an unknown descriptor or camera, or an unsupported layout.
 DescriptorLayout descriptorLayout(const Config& config);
 
+/// Config::descriptor_bits: sets bit j of `kept` (zeroed by the caller, kept_bits <= all_bits) to bit
+/// floor(j x all_bits / kept_bits) of `all`.
+void keepBitsEvenly(const uint64_t* all, int all_bits, uint64_t* kept, int kept_bits);
+
 /// The extractor named by config.descriptor, for its patch_size. Throws Error for an unknown name (listing
 /// the valid ones), for a descriptor that needs disparity outside stereo mode, or for a patch_size the
 /// extractor cannot use.

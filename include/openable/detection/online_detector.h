@@ -2,6 +2,7 @@
 
 #include <array>
 #include <memory>
+#include <set>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -52,11 +53,36 @@ struct OnlineOptions
   bool require_stamps = false;
 };
 
+/// The view channel (Config::view_channel_shift): the image's centre crop described and matched with the frame's
+/// views shifted sideways, over the same stored frames as the whole image, with its own sequences, decision and
+/// confirmation. OnlineDetector joins its loop closures with the whole image's.
+struct ViewChannel
+{
+  /// A new stream's channel: `session` as the whole image's (its places are numbered alike).
+  ViewChannel(const ValidConfig& config, SessionInfo session)
+    : describer(config),
+      detector(config, SessionMap(describer.layout(), config->toYaml()), MapMode::Continue, std::move(session)),
+      decision(*config),
+      confirmation(config->confirm_frames)
+  {
+  }
+  FrameDescriber describer;
+  LoopDetector detector;
+  LoopDecision decision;
+  LoopConfirmation confirmation;
+};
+
 /// The one online pipeline: describe -> keyframe -> match -> decide -> verify. The nodelets and
 /// openable_offline both call it, so the offline tool lists exactly what a nodelet publishes.
 ///
 /// Loop-closure mode (first constructor) matches every frame against the stream's own past and stores it;
 /// localisation mode matches against a fixed reference map. Not thread-safe: callers serialise.
+///
+/// With view_channel_shift (loop-closure mode of a new stream: the first constructor, or an empty map continued) a
+/// second channel (ViewChannel) matches the same
+/// stored frames from their centre crops and shifted views; a frame's loop closure is the first either channel
+/// publishes, the whole image's where both publish it at once. A stream whose images are too small for views
+/// (Preprocessor::hasShiftedViews) switches the channel off until reset().
 class OnlineDetector
 {
 public:
@@ -129,6 +155,11 @@ public:
   {
     return confirmation_;
   }
+  /// The view channel while it runs, else null.
+  const ViewChannel* viewChannel() const
+  {
+    return views_on_ ? views_.get() : nullptr;
+  }
   bool localisationMode() const
   {
     return detector_.localisationMode();
@@ -153,7 +184,26 @@ private:
   Stillness stillness(const FrameDescriptor& descriptor, const std::vector<Patch>& cells) const;
   /// The input's views shifted left and right (Config::lateral_shift), one descriptor after the other, or none
   /// where there are none (no shift, a ring, a disparity descriptor).
-  FrameDescriptor shiftedViews(const FrameInput& input) const;
+  FrameDescriptor shiftedViews(const FrameDescriber& describer, const FrameInput& input) const;
+  /// Builds the view channel where the configuration asks for one (a new stream numbered as `session`).
+  void startViewChannel(SessionInfo session);
+  /// One channel's parts: the whole image's (detector_, decision_, confirmation_) or the view channel's.
+  struct Channel
+  {
+    LoopDetector& detector;
+    LoopDecision& decision;
+    LoopConfirmation& confirmation;
+  };
+  /// Decides `outcome` (its detection made by the channel's detector), verifies what the decision asks, and hands
+  /// it to the channel's confirmation: returns the earlier frames that it confirms.
+  std::vector<FrameOutcome> decideAndConfirm(Channel channel, const FrameFeatures* query, FrameOutcome& outcome);
+  /// The view channel's match of the frame being stored (its own descriptor and views), undecided.
+  FrameOutcome matchViews(const FrameInput& input, const FrameOutcome& stored);
+  /// Joins the two channels' outcomes of this frame and what each confirmed: a frame's first loop closure is kept
+  /// (the whole image's where both come at once), a later one of the same frame dropped. `outcome` becomes the
+  /// view channel's where only that one published (or holds pending) this frame.
+  std::vector<FrameOutcome> joinChannels(FrameOutcome& outcome, std::vector<FrameOutcome> confirmed, FrameOutcome& viewed,
+                                         std::vector<FrameOutcome> view_confirmed);
   /// The input's verification features (options_.verify with a camera), or null (the note says why).
   std::unique_ptr<FrameFeatures> queryFeatures(const FrameInput& input, FrameOutcome& outcome) const;
   /// The best match's stored info (FrameOutcome::match), looked up by id: storing the query may have evicted it.
@@ -172,6 +222,16 @@ private:
   bool has_last_stored_ = false;
   FrameDescriptor last_stored_;  ///< the last stored frame's descriptor (standstill)
   FrameOutcome last_outcome_;    ///< and its outcome: a frame standing still repeats it
+  FrameOutcome last_whole_outcome_;  ///< the whole image's channel's outcome of it (its confirmation's repeats)
+  FrameOutcome last_view_outcome_;   ///< the view channel's outcome of it
+  std::unique_ptr<ViewChannel> views_;  ///< Config::view_channel_shift in loop-closure mode of a new stream
+  bool views_on_ = false;               ///< views_ runs (off for a stream whose images have no views)
+  /// Frames a loop closure was published for, while a later one of theirs may still come (joinChannels).
+  std::set<uint64_t> published_frames_;
+  /// How long a frame stays there: a loop closure comes at most LoopDecision::kMaxJoined stored frames late, each
+  /// with its repeats (a standstill); 65,536 frames (about 2 h at 10 Hz) is beyond any run met, and the set stays
+  /// within a few MiB even if every frame published.
+  static constexpr uint64_t kJoinFrames = uint64_t(1) << 16;
   FrameDescriptor still_anchor_;  ///< the last stored frame that was not within a still camera's noise (stop_distance)
   int still_frames_ = 0;          ///< stored frames in a row since still_anchor_ within that noise
   int frames_out_of_noise_ = 0;   ///< frames in a row out of that noise while stopped

@@ -8,12 +8,24 @@
 
 namespace openable
 {
+void keepBitsEvenly(const uint64_t* all, int all_bits, uint64_t* kept, int kept_bits)
+{
+  // Bit j of the kept ones is bit floor(j x all / kept) of all: spread over the whole descriptor, so a HOG-B keeps
+  // bins of every block rather than dropping the last blocks.
+  for (int j = 0; j < kept_bits; ++j)
+  {
+    const int from = static_cast<int>(int64_t(j) * all_bits / kept_bits);
+    if ((all[from / 64] >> (from % 64)) & 1u)
+      kept[j / 64] |= uint64_t(1) << (j % 64);
+  }
+}
+
 DescriptorLayout descriptorLayout(const Config& config)
 {
   const DescriptorInfo& row = descriptorInfo(config.descriptor);
   DescriptorLayout layout;
   layout.binary = row.binary();
-  layout.cell_length = row.length;
+  layout.cell_length = layout.binary && config.descriptor_bits > 0 ? config.descriptor_bits : row.length;
   layout.cell_words = layout.binary ? wordsForBits(layout.cell_length) : (layout.cell_length + 1) / 2;
   const PreprocessOptions cells = PreprocessOptions::from(config);
   layout.cells = cells.cellsAcross() * cells.cellsDown();
@@ -46,7 +58,7 @@ FrameDescriber::FrameDescriber(const ValidConfig& config)
     extractor_(createDescriptorExtractor(*config))
 {
   // The registry's row and the extractor it builds must agree (test_descriptors checks every row).
-  if (extractor_->isBinary() != layout_.binary || extractor_->length() != layout_.cell_length)
+  if (extractor_->isBinary() != layout_.binary || extractor_->length() != row_->length)
     throw Error("descriptor " + config->descriptor + ": its registry row does not match its extractor");
 }
 
@@ -68,9 +80,16 @@ void FrameDescriber::describe(const std::vector<Patch>& patches, uint64_t* out) 
   for (int i = 0; i < layout_.cells; ++i)
   {
     uint64_t* cell = out + i * layout_.cell_words;
-    if (layout_.binary)
+    if (layout_.binary && layout_.cell_length == row_->length)
     {
       extractor.describeBinary(patches[i], cell);
+      continue;
+    }
+    if (layout_.binary)
+    {
+      std::vector<uint64_t> all(wordsForBits(row_->length), 0);
+      extractor.describeBinary(patches[i], all.data());
+      keepBitsEvenly(all.data(), row_->length, cell, layout_.cell_length);
       continue;
     }
     values.assign(layout_.cell_words * 2, 0.0f);

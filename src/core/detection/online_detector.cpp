@@ -1,5 +1,6 @@
 #include "openable/detection/online_detector.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -74,6 +75,7 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, const OnlineOptions& o
     features_(options.feature_bytes)
 {
   checkOptions(options);
+  startViewChannel(SessionInfo());
 }
 
 OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options)
@@ -105,13 +107,24 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, SessionMap map, MapMod
   : config_(*config),
     options_(options),
     describer_(config),
-    detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, std::move(session)),
+    detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, session),
     decision_(*config),
     confirmation_(config->confirm_frames),
     metric_(describer_.layout()),
     features_(options.feature_bytes)
 {
   checkOptions(options);
+  // A map's earlier sessions hold the whole image's places alone: the view channel has nothing to match there.
+  if (mode == MapMode::Continue && detector_.map().frameCount() == 0)
+    startViewChannel(std::move(session));
+}
+
+void OnlineDetector::startViewChannel(SessionInfo session)
+{
+  if (config_.view_channel_shift <= 0.0)
+    return;
+  views_ = std::make_unique<ViewChannel>(ValidConfig(config_.viewChannel()), std::move(session));
+  views_on_ = true;
 }
 
 std::vector<Patch> OnlineDetector::patches(const FrameInput& input) const
@@ -156,19 +169,32 @@ FrameDescriptor OnlineDetector::describe(const FrameInput& input) const
   return describer_.describe(placePatches(input));
 }
 
-FrameDescriptor OnlineDetector::shiftedViews(const FrameInput& input) const
+FrameDescriptor OnlineDetector::shiftedViews(const FrameDescriber& describer, const FrameInput& input) const
 {
-  const Preprocessor& pre = describer_.preprocessor();
+  const Preprocessor& pre = describer.preprocessor();
   FrameDescriptor views;
-  if (input.image.empty() || !pre.hasShiftedViews(input.image.size()) || describer_.descriptor().needs_disparity)
+  if (input.image.empty() || !pre.hasShiftedViews(input.image.size()) || describer.descriptor().needs_disparity)
     return views;
   // The place stores its centre; the frame looks for it from both sides too (a camera on the other side of the
   // path, or turned a little, sees the scene shifted by a tenth of the image or more).
-  const size_t words = describer_.layout().frameWords();
+  const size_t words = describer.layout().frameWords();
   views.resize(2 * words);
-  describer_.describe(pre.patches(input.image, Preprocessor::View::Left), views.data());
-  describer_.describe(pre.patches(input.image, Preprocessor::View::Right), views.data() + words);
+  describer.describe(pre.patches(input.image, Preprocessor::View::Left), views.data());
+  describer.describe(pre.patches(input.image, Preprocessor::View::Right), views.data() + words);
   return views;
+}
+
+FrameOutcome OnlineDetector::matchViews(const FrameInput& input, const FrameOutcome& stored)
+{
+  FrameOutcome viewed;
+  viewed.query = stored.query;
+  viewed.stored = true;
+  viewed.frame = frames_;
+  // The whole image was described already: the image is good. Its centre crop is the channel's place.
+  const FrameDescriptor centre = views_->describer.describe(views_->describer.preprocessor().patches(input.image));
+  viewed.detection = views_->detector.process(centre, stored.query, shiftedViews(views_->describer, input));
+  lookUpMatch(viewed);  // the same frames, stored in both channels: one id names a frame in either
+  return viewed;
 }
 
 bool OnlineDetector::isKeyframe(const FrameInput& input)
@@ -284,18 +310,24 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   {
     // The same place as the last stored frame: it adds no place and no step to the sequences (a stop must
     // neither grow the history nor become a "revisit" of itself), and it repeats that frame's loop closure.
-    FrameOutcome repeated = last_outcome_;
-    repeated.stored = false;
-    repeated.query.stamp = input.stamp;
-    repeated.query.source = input.source;
-    repeated.query.has_pose = input.has_pose;
-    repeated.query.pose = input.pose;
-    repeated.times = outcome.times;
-    repeated.frame = frames_;
-    if (!repeated.published() && repeated.status != FrameStatus::Pending)
-      repeated.status = FrameStatus::Standstill;
-    confirmation_.repeated(repeated);  // a pending loop closure's repeats wait with it
-    return repeated;
+    const auto repeat = [&](FrameOutcome repeated)
+    {
+      repeated.stored = false;
+      repeated.query.stamp = input.stamp;
+      repeated.query.source = input.source;
+      repeated.query.has_pose = input.has_pose;
+      repeated.query.pose = input.pose;
+      repeated.times = outcome.times;
+      repeated.frame = frames_;
+      if (!repeated.published() && repeated.status != FrameStatus::Pending)
+        repeated.status = FrameStatus::Standstill;
+      return repeated;
+    };
+    // A pending loop closure's repeats wait with it, in each channel.
+    confirmation_.repeated(repeat(views_on_ ? last_whole_outcome_ : last_outcome_));
+    if (views_on_)
+      views_->confirmation.repeated(repeat(last_view_outcome_));
+    return repeat(last_outcome_);
   }
   const bool still_noise = still == Stillness::WithinNoise;
   if (config_.stop_distance > 0.0 && still_frames_ >= config_.stop_frames)
@@ -314,7 +346,7 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   }
 
   start = std::chrono::steady_clock::now();
-  const FrameDescriptor shifted = shiftedViews(input);
+  const FrameDescriptor shifted = shiftedViews(describer_, input);
   outcome.times.describe_ms += millisecondsSince(start);
   start = std::chrono::steady_clock::now();
   outcome.detection = detector_.process(descriptor, outcome.query, shifted);
@@ -323,51 +355,30 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   if (!detector_.localisationMode())
     outcome.query.session = static_cast<uint32_t>(detector_.ownSession());
   lookUpMatch(outcome);
+  outcome.frame = frames_;
+  // The view channel stores every frame the whole image's does, so that both number them alike; a stream whose
+  // images are too small for views never has any (a Nordland frame of 64x32): the channel would only repeat the
+  // whole image on fewer bits.
+  if (views_on_ && !views_->describer.preprocessor().hasShiftedViews(input.image.size()))
+    views_on_ = false;
+  FrameOutcome viewed;
+  if (views_on_)
+    viewed = matchViews(input, outcome);
   outcome.times.match_ms = millisecondsSince(start);
   start = std::chrono::steady_clock::now();
   std::unique_ptr<FrameFeatures> query = queryFeatures(input, outcome);
-  // Verification runs at most once a frame: where the decision asks for it (a frame that lacks appearance
-  // evidence), or on what it published.
-  bool asked = false;
-  const auto verifyOnce = [&]
+  std::vector<FrameOutcome> confirmed = decideAndConfirm({detector_, decision_, confirmation_}, query.get(), outcome);
+  if (views_on_)
   {
-    if (!asked)
-      verifyBestMatch(query.get(), outcome);
-    asked = true;
-    return outcome.verified;
-  };
-  outcome.status = decision_.decide(outcome.detection,
-                                    options_.verify ? LoopDecision::GeometryCheck(verifyOnce) : nullptr);
-  outcome.score = decision_.score(outcome.detection);
-  // The matcher follows the decision's run (what verification does with it comes after): a stream whose loops are
-  // only flagged unverified matches as one whose loops are published.
-  detector_.setSearching(outcome.status != FrameStatus::Published || decision_.catchingUp());
-  // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
-  // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
-  const bool run_start = outcome.status == FrameStatus::Inconsistent && decision_.mayJoinLater();
-  if (options_.verify && (outcome.published() || run_start))
-  {
-    verifyOnce();
-    if (!outcome.verification_ran && options_.verify_required)  // nothing through that it could not check
-      outcome.status = FrameStatus::Unverified;
-    else if (outcome.verification_ran && !outcome.verified && config_.verification_veto)
-      outcome.status = FrameStatus::FailedVerification;
+    last_whole_outcome_ = outcome;
+    std::vector<FrameOutcome> view_confirmed =
+        decideAndConfirm({views_->detector, views_->decision, views_->confirmation}, query.get(), viewed);
+    last_view_outcome_ = viewed;
+    confirmed = joinChannels(outcome, std::move(confirmed), viewed, std::move(view_confirmed));
   }
   if (query && !detector_.localisationMode())
     features_.insert(std::move(*query));  // every stored frame keeps its features: later frames may close a loop with it
   outcome.times.verify_ms = millisecondsSince(start);
-  outcome.frame = frames_;
-  // A frame that may join a later run: as the decision says, unless verification must accept every loop closure
-  // and did not check it (not-unique frames are not verified: that would be every frame).
-  const bool strict = options_.verify && (config_.verification_veto || options_.verify_required);
-  const bool may_join = decision_.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent ||
-                                                     (outcome.status == FrameStatus::NotUnique && !strict));
-  std::vector<FrameOutcome> confirmed =
-      confirmation_.stored(outcome, decision_.joinedBefore(), may_join, decision_.ownFramesBefore());
-  placeInHindsight(confirmed, outcome);
-  for (FrameOutcome& c : confirmed)
-    if (!c.has_match_info)
-      lookUpMatch(c);
   has_last_stored_ = true;
   last_stored_ = descriptor;
   last_outcome_ = outcome;
@@ -381,6 +392,81 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   }
   outcome.confirmed = std::move(confirmed);
   return outcome;
+}
+
+std::vector<FrameOutcome> OnlineDetector::decideAndConfirm(Channel channel, const FrameFeatures* query,
+                                                           FrameOutcome& outcome)
+{
+  // Verification runs at most once a frame: where the decision asks for it (a frame that lacks appearance
+  // evidence), or on what it published.
+  bool asked = false;
+  const auto verifyOnce = [&]
+  {
+    if (!asked)
+      verifyBestMatch(query, outcome);
+    asked = true;
+    return outcome.verified;
+  };
+  LoopDecision& decision = channel.decision;
+  outcome.status = decision.decide(outcome.detection,
+                                   options_.verify ? LoopDecision::GeometryCheck(verifyOnce) : nullptr);
+  outcome.score = decision.score(outcome.detection);
+  // The matcher follows the decision's run (what verification does with it comes after): a stream whose loops are
+  // only flagged unverified matches as one whose loops are published.
+  channel.detector.setSearching(outcome.status != FrameStatus::Published || decision.catchingUp());
+  // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
+  // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
+  const bool run_start = outcome.status == FrameStatus::Inconsistent && decision.mayJoinLater();
+  if (options_.verify && (outcome.published() || run_start))
+  {
+    verifyOnce();
+    if (!outcome.verification_ran && options_.verify_required)  // nothing through that it could not check
+      outcome.status = FrameStatus::Unverified;
+    else if (outcome.verification_ran && !outcome.verified && config_.verification_veto)
+      outcome.status = FrameStatus::FailedVerification;
+  }
+  // A frame that may join a later run: as the decision says, unless verification must accept every loop closure
+  // and did not check it (not-unique frames are not verified: that would be every frame).
+  const bool strict = options_.verify && (config_.verification_veto || options_.verify_required);
+  const bool may_join = decision.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent ||
+                                                    (outcome.status == FrameStatus::NotUnique && !strict));
+  std::vector<FrameOutcome> confirmed =
+      channel.confirmation.stored(outcome, decision.joinedBefore(), may_join, decision.ownFramesBefore());
+  placeInHindsight(confirmed, outcome);
+  for (FrameOutcome& c : confirmed)
+    if (!c.has_match_info)
+      lookUpMatch(c);
+  return confirmed;
+}
+
+std::vector<FrameOutcome> OnlineDetector::joinChannels(FrameOutcome& outcome, std::vector<FrameOutcome> confirmed,
+                                                       FrameOutcome& viewed, std::vector<FrameOutcome> view_confirmed)
+{
+  const auto first = [this](const FrameOutcome& o) { return published_frames_.insert(o.frame).second; };
+  std::vector<FrameOutcome> joined;
+  for (FrameOutcome& c : confirmed)
+    if (first(c))
+      joined.push_back(std::move(c));
+  for (FrameOutcome& c : view_confirmed)
+    if (first(c))
+      joined.push_back(std::move(c));
+  std::stable_sort(joined.begin(), joined.end(),
+                   [](const FrameOutcome& a, const FrameOutcome& b) { return a.frame < b.frame; });
+  // This frame's own decision: the whole image's, unless only the view channel publishes it or holds it pending.
+  const auto claims = [](const FrameOutcome& o) { return o.published() || o.status == FrameStatus::Pending; };
+  if (!claims(outcome) && claims(viewed))
+  {
+    const StageTimes times = outcome.times;
+    outcome = viewed;
+    outcome.times = times;
+  }
+  if (outcome.published())
+    first(outcome);
+  // A frame's loop closures come within the confirmations' reach: kept that long, so the set stays bounded.
+  const uint64_t reach = kJoinFrames;
+  while (!published_frames_.empty() && *published_frames_.begin() + reach < frames_)
+    published_frames_.erase(published_frames_.begin());
+  return joined;
 }
 
 void OnlineDetector::lookUpMatch(FrameOutcome& outcome) const
@@ -462,6 +548,13 @@ void OnlineDetector::updateConfig(const Config& config)
   detector_.updateMatching(config);  // validates and refuses descriptor keys
   decision_.setOptions(DecisionOptions::from(config));
   confirmation_.setFrames(config.confirm_frames);
+  if (views_)
+  {
+    const Config views = config.viewChannel();
+    views_->detector.updateMatching(views);
+    views_->decision.setOptions(DecisionOptions::from(views));
+    views_->confirmation.setFrames(views.confirm_frames);
+  }
   config_ = config;
 }
 
@@ -477,6 +570,14 @@ void OnlineDetector::reset()
   still_frames_ = 0;
   frames_out_of_noise_ = 0;
   still_anchor_.clear();
+  published_frames_.clear();
+  if (views_)
+  {
+    views_->detector.reset();
+    views_->decision.reset();
+    views_->confirmation.reset();
+    views_on_ = true;
+  }
 }
 
 }  // namespace openable
