@@ -59,7 +59,8 @@ struct Config
   /// nothing by itself (no gate is set); reproduces the paper's matrices.
   static Config paper();
   /// The view channel's configuration (view_channel_shift): this one with lateral_shift = view_channel_shift,
-  /// descriptor_bits = view_channel_bits and no view channel of its own.
+  /// descriptor_bits = view_channel_bits (a binary descriptor's), view_channel_consistent_frames and no view channel
+  /// of its own.
   Config viewChannel() const;
 
   // Camera and description.
@@ -85,13 +86,14 @@ struct Config
   /// A second channel (0 = off): the image's centre crop, 1 - 2 x this of the width, matched with the frame's
   /// views shifted left and right (as lateral_shift does), with its own sequences, decision and confirmation. A
   /// frame's loop closure is the whole image's where that channel has one, else this channel's: the other side of
-  /// a path found without losing what the whole image finds (a faster pace, a camera turning in place). Loop-
-  /// closure mode of a new stream; maps, sessions and localisation hold and use the whole image's channel alone.
-  double view_channel_shift = 0.0;
-  int view_channel_bits = 0;  ///< descriptor_bits of that channel's places (0 = all)
+  /// a path found without losing what the whole image finds (a faster pace). Loop-closure mode of a new stream, on
+  /// images that have views (mono, or a stereo camera's left image with a mono descriptor; not a panorama, not
+  /// D-LDB, not with lateral_shift); maps, sessions and localisation hold and use the whole image's channel alone.
+  double view_channel_shift = 0.12;
+  int view_channel_bits = 128;  ///< descriptor_bits of that channel's places (0 = all; a float descriptor keeps all)
   /// consistent_frames of that channel (0 = consistent_frames): its distances, the smallest of three views on fewer
   /// bits, are noisier, and a run of wrong matches holds together longer.
-  int view_channel_consistent_frames = 0;
+  int view_channel_consistent_frames = 12;
 
   // Matching.
   int sequence_length = 30;     ///< L: a place is the sequence of the last L frames

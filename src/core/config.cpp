@@ -196,19 +196,8 @@ std::vector<ConfigProblem> Config::problems() const
           "0 (all) or at most the " + std::to_string(descriptor_row->length) + " bits of " + descriptor);
   };
   bitsOf("descriptor_bits", descriptor_bits);
-  bitsOf("view_channel_bits", view_channel_bits);
-  if (view_channel_shift > 0.0)
-  {
-    if (lateral_shift > 0.0)
-      bad({"view_channel_shift", "lateral_shift"}, formatDouble(view_channel_shift) + " / " + formatDouble(lateral_shift),
-          "one of them 0: the view channel matches shifted views beside the whole image, lateral_shift instead of it");
-    if (camera_parsed && *camera_parsed == CameraType::Panoramic)
-      bad({"view_channel_shift"}, formatDouble(view_channel_shift),
-          "0 with camera_type panoramic (a ring is matched at every rotation already)");
-    if (descriptor_row && descriptor_row->needs_disparity)
-      bad({"view_channel_shift"}, formatDouble(view_channel_shift),
-          "0 with " + descriptor + " (the disparity is not shifted with the image)");
-  }
+  if (descriptor_row && descriptor_row->binary())  // a float descriptor's view channel keeps every value
+    bitsOf("view_channel_bits", view_channel_bits);
   if (min_sequence_length > sequence_length && sequence_length >= 1)
     bad({"min_sequence_length"}, std::to_string(min_sequence_length),
         "an integer in [0, " + std::to_string(sequence_length) + "] (at most sequence_length)");
@@ -264,7 +253,8 @@ Config Config::viewChannel() const
 {
   Config views = *this;
   views.lateral_shift = view_channel_shift;
-  views.descriptor_bits = view_channel_bits;
+  const DescriptorInfo* row = findDescriptor(descriptor);
+  views.descriptor_bits = row && row->binary() ? view_channel_bits : 0;
   if (view_channel_consistent_frames > 0)
     views.consistent_frames = view_channel_consistent_frames;
   views.view_channel_shift = 0.0;

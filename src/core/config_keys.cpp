@@ -135,10 +135,10 @@ const std::vector<KeyAccess>& table()
       makeKey("view_channel_shift",
               "a second channel: the image's centre crop (1 - 2 x this of the width) matched with the frame's views "
               "shifted left and right, its own sequences and decision; a frame's loop is the whole image's, else this "
-              "channel's (0 = off). Mono images; loop-closure mode of a new stream",
-              &Config::view_channel_shift).range(0, 0.25).describes(),
+              "channel's (0 = off). Loop-closure mode of a new stream, images with views: not a panorama, D-LDB or lateral_shift",
+              &Config::view_channel_shift).range(0, 0.25),
       makeKey("view_channel_bits", "descriptor_bits of the view channel's places (0 = all)",
-              &Config::view_channel_bits).range(0, 65536).describes(),
+              &Config::view_channel_bits).range(0, 65536),
       makeKey("view_channel_consistent_frames", "consistent_frames of the view channel (0 = consistent_frames)",
               &Config::view_channel_consistent_frames).range(0, 1000),
       makeKey("sequence_length", "L: frames per sequence (1 = single images)", &Config::sequence_length).range(1, 10000).live(),

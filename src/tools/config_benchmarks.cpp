@@ -19,6 +19,12 @@
 //   BM_ConfigPaceMatchShifted/default/<N>
 //                                     BM_ConfigPaceMatch with two shifted views a query (lateral_shift > 0)
 //   BM_ConfigMemoryRead/<config>/<N>  reading those N descriptors once (a sum over every word)
+//   BM_ConfigTwoChannelMatch/<config>/<N>
+//                                     a config with a view channel (view_channel_shift): BM_ConfigPaceMatch and the
+//                                     view channel's frame (its own map of crops on view_channel_bits, each query
+//                                     with two shifted views), what a frame of the detector pays, searching
+//   BM_ConfigTwoChannelRead/<config>/<N>
+//                                     reading both channels' maps once
 //   BM_ConfigMatchLength/gardens_point/10000000/<L>
 //                                     BM_ConfigMatch with another sequence length: a frame reads each descriptor
 //                                     once, so its cost should not depend on L
@@ -135,6 +141,16 @@ void setBytes(benchmark::State& state, const openable::PlaceDatabase& db)
   state.counters["map_bytes"] = double(db.bytes());
 }
 
+void setTwoChannelBytes(benchmark::State& state, const openable::PlaceDatabase& whole,
+                        const openable::PlaceDatabase& views)
+{
+  const size_t frame_bytes = sizeof(uint64_t) * (whole.layout().frameWords() + views.layout().frameWords());
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(whole.size() * frame_bytes));
+  state.counters["N"] = double(whole.size());
+  state.counters["descriptor_bytes"] = double(frame_bytes);
+  state.counters["map_bytes"] = double(whole.bytes() + views.bytes());
+}
+
 void imageRead(benchmark::State& state)
 {
   const cv::Mat& image = vgaImage();
@@ -190,47 +206,137 @@ void configMatch(benchmark::State& state, const std::string& name, size_t n, int
   setBytes(state, db);
 }
 
+/// One frame of a channel as PaceMatcher runs it against `db`: a random query with `views` shifted views behind it
+/// (the detector matches them all, the smallest distance counts), then the choice of its top_k candidates.
+class PaceFrame
+{
+public:
+  PaceFrame(const openable::Config& config, const openable::PlaceDatabase& db, size_t n, bool slip, bool searching,
+            int sequence_length, size_t views)
+    : config_(config),
+      db_(db),
+      n_(n),
+      views_(views),
+      words_(db.layout().frameWords()),
+      matcher_(db.layout(), sequence_length, config.bidirectional, paceOptions(config, slip))
+  {
+    matcher_.setSearching(searching);
+    std::mt19937_64 rng(99);
+    queries_.assign(64, openable::FrameDescriptor(words_ * (1 + views)));
+    for (auto& q : queries_)
+      for (size_t v = 0; v <= views; ++v)
+        randomDescriptor(db.layout(), rng, q.data() + v * words_);
+    for (int i = 0; i < 3; ++i)  // past the first row, which has no path behind it
+      match();
+  }
+  void operator()()
+  {
+    match();
+    matcher_.smallestDistinct(size_t(std::max(config_.top_k, 2)), size_t(config_.uniqueness_window), 1, candidates_);
+    benchmark::DoNotOptimize(candidates_.data());
+  }
+  size_t paces() const
+  {
+    return matcher_.paces().size();
+  }
+
+private:
+  static openable::PaceOptions paceOptions(const openable::Config& config, bool slip)
+  {
+    openable::PaceOptions pace;
+    pace.max_pace = std::max(3, config.max_pace);
+    pace.penalty = static_cast<float>(config.pace_penalty);
+    pace.tolerance = config.pace_tolerance;
+    pace.slip = slip ? static_cast<float>(config.slip_penalty) : 0.0f;
+    pace.prior = static_cast<float>(config.pace_prior);
+    return pace;
+  }
+  void match()
+  {
+    const openable::FrameDescriptor& q = queries_[next_++ % queries_.size()];
+    matcher_.matchShifted(q.data(), q.data() + words_, views_, db_, n_);
+  }
+  openable::Config config_;
+  const openable::PlaceDatabase& db_;
+  size_t n_, views_, words_;
+  openable::PaceMatcher matcher_;
+  std::vector<openable::FrameDescriptor> queries_;
+  std::vector<size_t> candidates_;
+  size_t next_ = 0;
+};
+
 /// `sequence_length` 0: the config's own. `shifted`: each query with two shifted views, whatever the config's
-/// lateral_shift says (the views are matched where it is above 0).
+/// lateral_shift says (the views are matched where it is above 0). The whole image's channel alone.
 void configPaceMatch(benchmark::State& state, const std::string& name, size_t n, bool slip, bool searching,
                      int sequence_length, bool shifted)
 {
   const openable::Config config = shipped(name);
-  const int L = sequence_length > 0 ? sequence_length : config.sequence_length;
   const openable::PlaceDatabase& db = database(name, n);
-  openable::PaceOptions pace;
-  pace.max_pace = std::max(3, config.max_pace);
-  pace.penalty = static_cast<float>(config.pace_penalty);
-  pace.tolerance = config.pace_tolerance;
-  pace.slip = slip ? static_cast<float>(config.slip_penalty) : 0.0f;
-  pace.prior = static_cast<float>(config.pace_prior);
-  openable::PaceMatcher matcher(db.layout(), L, config.bidirectional, pace);
-  matcher.setSearching(searching);
-  std::mt19937_64 rng(99);
-  // Each query with its two shifted views where the configuration has them (lateral_shift: the detector matches
-  // them all, the smallest distance counts), one after another behind the query.
-  const size_t words = db.layout().frameWords();
   const size_t views = shifted || config.lateral_shift > 0.0 ? 2 : 0;
-  std::vector<openable::FrameDescriptor> queries(64, openable::FrameDescriptor(words * (1 + views)));
-  for (auto& q : queries)
-    for (size_t v = 0; v <= views; ++v)
-      randomDescriptor(db.layout(), rng, q.data() + v * words);
-  const auto match = [&](const openable::FrameDescriptor& q)
-  { matcher.matchShifted(q.data(), q.data() + words, views, db, n); };
-  for (int i = 0; i < 3; ++i)  // past the first row, which has no path behind it
-    match(queries[i % queries.size()]);
-  size_t i = 0;
-  std::vector<size_t> candidates;
-  const size_t wanted = size_t(std::max(config.top_k, 2));
+  PaceFrame frame(config, db, n, slip, searching, sequence_length > 0 ? sequence_length : config.sequence_length, views);
+  for (auto _ : state)
+    frame();
+  setBytes(state, db);
+  state.counters["paces"] = double(frame.paces());
+  state.counters["shifted_views"] = double(views);
+}
+
+/// The view channel's map (Config::view_channel_shift) of N random places, beside database()'s.
+const openable::PlaceDatabase& viewDatabase(const std::string& config_name, size_t n)
+{
+  static std::unique_ptr<openable::PlaceDatabase> cached;
+  if (cached && cached->size() == n)
+    return *cached;
+  cached.reset();
+  const openable::DescriptorLayout layout = openable::descriptorLayout(shipped(config_name).viewChannel());
+  cached = std::make_unique<openable::PlaceDatabase>(layout);
+  std::mt19937_64 rng(n + 1);
+  openable::FrameDescriptor d(layout.frameWords());
+  for (size_t i = 0; i < n; ++i)
+  {
+    randomDescriptor(layout, rng, d.data());
+    cached->add(d);
+  }
+  cached->shrinkToFit();
+  return *cached;
+}
+
+/// What a frame of a configuration with a view channel pays: the whole image's channel and the view channel (its
+/// places' crops on view_channel_bits, each query with two shifted views), searching. Bytes: both maps.
+void configTwoChannelMatch(benchmark::State& state, const std::string& name, size_t n)
+{
+  const openable::Config config = shipped(name);
+  const openable::Config views = config.viewChannel();
+  const openable::PlaceDatabase& whole_db = database(name, n);
+  const openable::PlaceDatabase& view_db = viewDatabase(name, n);
+  PaceFrame whole(config, whole_db, n, true, true, config.sequence_length, 0);
+  PaceFrame viewed(views, view_db, n, true, true, views.sequence_length, 2);
   for (auto _ : state)
   {
-    match(queries[i++ % queries.size()]);
-    matcher.smallestDistinct(wanted, size_t(config.uniqueness_window), 1, candidates);
-    benchmark::DoNotOptimize(candidates.data());
+    whole();
+    viewed();
   }
-  setBytes(state, db);
-  state.counters["paces"] = double(matcher.paces().size());
-  state.counters["shifted_views"] = double(views);
+  setTwoChannelBytes(state, whole_db, view_db);
+}
+
+/// One pass over both channels' descriptors.
+void configTwoChannelRead(benchmark::State& state, const std::string& name, size_t n)
+{
+  const openable::PlaceDatabase& whole_db = database(name, n);
+  const openable::PlaceDatabase& view_db = viewDatabase(name, n);
+  for (auto _ : state)
+  {
+    uint64_t x = 0;
+    for (const openable::PlaceDatabase* db : {&whole_db, &view_db})
+    {
+      const uint64_t* words = db->data();
+      const size_t count = n * db->layout().frameWords();
+      for (size_t i = 0; i < count; ++i)
+        x += words[i];
+    }
+    benchmark::DoNotOptimize(x);
+  }
+  setTwoChannelBytes(state, whole_db, view_db);
 }
 
 void configMemoryRead(benchmark::State& state, const std::string& name, size_t n)
@@ -283,6 +389,13 @@ void registerConfigBenchmarks()
             ->Unit(benchmark::kMillisecond);
       benchmark::RegisterBenchmark(("BM_ConfigMemoryRead/" + suffix).c_str(), configMemoryRead, name, n)
           ->Unit(benchmark::kMillisecond);
+      if (shipped(name).view_channel_shift > 0.0)  // both channels a frame, against a read of both maps
+      {
+        benchmark::RegisterBenchmark(("BM_ConfigTwoChannelMatch/" + suffix).c_str(), configTwoChannelMatch, name, n)
+            ->Unit(benchmark::kMillisecond);
+        benchmark::RegisterBenchmark(("BM_ConfigTwoChannelRead/" + suffix).c_str(), configTwoChannelRead, name, n)
+            ->Unit(benchmark::kMillisecond);
+      }
       if (name == "default" && n == 1000000)
         for (int L : {10, 30, 100, 300})
           benchmark::RegisterBenchmark(("BM_ConfigPaceMatchLength/" + suffix + "/" + std::to_string(L)).c_str(),

@@ -384,7 +384,7 @@ TEST(Config, DescriptorAndLiveKeysComeFromTheTable)
   for (const auto& name : Config::descriptorKeys())
     EXPECT_FALSE(std::find(Config::liveKeys().begin(), Config::liveKeys().end(), name) != Config::liveKeys().end())
         << name << " changes the descriptors, so it cannot be live";
-  EXPECT_EQ(Config::descriptorKeys().size(), 13u);
+  EXPECT_EQ(Config::descriptorKeys().size(), 14u);
   EXPECT_NE(std::find(Config::liveKeys().begin(), Config::liveKeys().end(), "threshold"), Config::liveKeys().end());
   EXPECT_EQ(std::find(Config::liveKeys().begin(), Config::liveKeys().end(), "max_history"), Config::liveKeys().end());
 }

@@ -213,3 +213,58 @@ TEST(Dldb, EurocRevisitIsTheNearestPair)
   EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[2]));
   EXPECT_LT(pairs[0].distance(pairs[1]), pairs[0].distance(pairs[3]));
 }
+
+// descriptor_bits: a binary descriptor keeps that many of its bits, evenly spread. Known answer on one word, and
+// against a naive reference (each kept bit read one at a time from the whole descriptor) on real HOG-B.
+TEST(DescriptorBits, KeepsBitsEvenlySpread)
+{
+  const uint64_t all[1] = {0xB3u};  // bits 0, 1, 4, 5, 7
+  uint64_t kept[1] = {0};
+  keepBitsEvenly(all, 8, kept, 4);  // bits 0, 2, 4, 6 of all
+  EXPECT_EQ(kept[0], 0x5u);         // 1, 0, 1, 0
+  uint64_t same[1] = {0};
+  keepBitsEvenly(all, 8, same, 8);
+  EXPECT_EQ(same[0], all[0]);
+}
+
+TEST(DescriptorBits, ARealHogBKeepsTheNaivelySelectedBitsAndFewerBytes)
+{
+  Config whole = configFor("HOG-B");
+  Config fewer = whole;
+  fewer.descriptor_bits = 128;
+  const FrameDescriber all_bits(whole), some_bits(fewer);
+  ASSERT_EQ(some_bits.layout().cell_length, 128);
+  ASSERT_EQ(some_bits.layout().cell_words, 2);  // 16 bytes a place instead of 48
+  EXPECT_EQ(descriptorLayout(fewer), some_bits.layout());
+  for (int frame : {0, 77, 150})
+  {
+    const cv::Mat image = gardensPoint("day_left", frame);
+    const FrameDescriptor a = all_bits.describeImage(image), k = some_bits.describeImage(image);
+    ASSERT_EQ(k.size(), 2u);
+    for (int j = 0; j < 128; ++j)
+    {
+      const int from = j * 324 / 128;
+      EXPECT_EQ((k[j / 64] >> (j % 64)) & 1u, (a[from / 64] >> (from % 64)) & 1u) << "bit " << j;
+    }
+  }
+}
+
+TEST(DescriptorBits, RefusesMoreBitsThanTheDescriptorHasAndAFloatDescriptor)
+{
+  Config c = configFor("HOG-B");
+  c.descriptor_bits = 325;
+  EXPECT_FALSE(c.problems().empty());
+  c.descriptor_bits = 324;
+  EXPECT_TRUE(c.problems().empty());
+  c.view_channel_bits = 400;
+  ASSERT_EQ(c.validate().size(), 1u);
+  EXPECT_NE(c.validate()[0].find("view_channel_bits"), std::string::npos) << c.validate()[0];
+  Config hog = configFor("HOG");
+  ASSERT_GT(hog.view_channel_bits, 0);
+  EXPECT_TRUE(hog.problems().empty());  // a float descriptor's view channel keeps every value
+  EXPECT_EQ(hog.viewChannel().descriptor_bits, 0);
+  hog.descriptor_bits = 100;
+  ASSERT_EQ(hog.validate().size(), 1u);
+  EXPECT_NE(hog.validate()[0].find("float descriptor"), std::string::npos) << hog.validate()[0];
+  EXPECT_THROW(FrameDescriber{hog}, Error);
+}

@@ -235,13 +235,114 @@ TEST(OnlineDetector, AShortRouteGetsLoopsFromTheRevisitsFirstFrames)
 // sets: 53 -> 158 published at 1x, doc/results.md "Views shifted sideways").
 TEST(OnlineDetector, ViewsShiftedSidewaysFindTheOtherSideOfThePathAtNight)
 {
-  Config shifted = shipped("default");
-  ASSERT_EQ(shifted.lateral_shift, 0.0);
+  Config whole = shipped("default");
+  ASSERT_EQ(whole.lateral_shift, 0.0);
+  whole.view_channel_shift = 0.0;
+  Config shifted = whole;
   shifted.lateral_shift = 0.12;
-  const Scored now =
-      expectMoreLoopsAndNoWrongOne(gardensPointStream("day_left", "night_right"), 200, shifted, shipped("default"), 0.4,
-                                   "day_left_night_right", "_shifted_recall", "_whole_recall");
+  const Scored now = expectMoreLoopsAndNoWrongOne(gardensPointStream("day_left", "night_right"), 200, shifted, whole,
+                                                  0.4, "day_left_night_right", "_shifted_recall", "_whole_recall");
   EXPECT_GE(now.recall, 0.75);
+}
+
+// The view channel (view_channel_shift, default.yaml): the whole image and its shifted views as two channels over
+// the same stored frames, a frame's loop the first either publishes. It finds the other side of the path at night
+// as lateral_shift does, and keeps what the whole image finds where lateral_shift loses it (day_right then
+// night_right at 3x: 0.761 both, lateral_shift alone 0). Measured (doc/results.md "Two channels, built"): day_left
+// then night_right 0.265 -> 0.745, day_right then day_left 0.900 -> 0.950, day_right then night_right 0.955 both.
+TEST(OnlineDetector, AViewChannelFindsTheOtherSideOfThePathAndKeepsWhatTheWholeImageFinds)
+{
+  const Config joined = shipped("default");
+  ASSERT_GT(joined.view_channel_shift, 0.0);
+  Config whole = joined;
+  whole.view_channel_shift = 0.0;
+  const Scored other_side = expectMoreLoopsAndNoWrongOne(gardensPointStream("day_left", "night_right"), 200, joined,
+                                                         whole, 0.4, "day_left_night_right", "_joined_recall",
+                                                         "_whole_recall");
+  EXPECT_GE(other_side.recall, 0.7);
+  for (const char* second : {"night_right", "day_left"})
+    expectMoreLoopsAndNoWrongOne(gardensPointStream("day_right", second), 200, joined, whole, 0.0,
+                                 std::string("day_right_") + second, "_joined_recall", "_whole_recall");
+  // 3x (every third frame of the revisit): the views alone lose it, the join keeps the whole image's loops.
+  const auto& stream = gardensPointStream("day_right", "night_right");
+  std::vector<cv::Mat> fast(stream.begin(), stream.begin() + 200);
+  for (size_t i = 200; i < stream.size(); i += 3)
+    fast.push_back(stream[i]);
+  const auto outcomes = runStream(fast, joined), alone = runStream(fast, whole);
+  int joined_right = 0, whole_right = 0;
+  for (size_t t = 200; t < fast.size(); ++t)
+  {
+    const long place = static_cast<long>(3 * (t - 200));
+    const auto right = [&](const FrameOutcome& o)
+    { return o.published() && std::labs(static_cast<long>(o.detection.best.id) - place) <= 3; };
+    joined_right += right(outcomes[t]) ? 1 : 0;
+    whole_right += right(alone[t]) ? 1 : 0;
+    EXPECT_TRUE(!outcomes[t].published() || right(outcomes[t])) << "frame " << t;
+  }
+  RecordProperty("day_right_night_right_3x_joined_right", joined_right);
+  EXPECT_GE(joined_right, whole_right);
+  EXPECT_GT(whole_right, 30);
+}
+
+// Both channels may confirm the same frame: it is published once, with the first loop closure that came.
+TEST(OnlineDetector, AFrameIsPublishedOnceWhateverChannelsConfirmIt)
+{
+  OnlineDetector detector(shipped("default"));
+  ASSERT_NE(detector.viewChannel(), nullptr);
+  std::map<uint64_t, int> published;
+  const auto& stream = gardensPointStream("day_right", "day_left");
+  for (size_t i = 0; i < stream.size(); ++i)
+  {
+    FrameInput input;
+    input.image = stream[i];
+    input.stamp = 1.0 + double(i);
+    const FrameOutcome outcome = detector.process(input);
+    if (outcome.published())
+      ++published[outcome.frame];
+    for (const FrameOutcome& c : outcome.confirmed)
+    {
+      EXPECT_TRUE(c.published());
+      ++published[c.frame];
+    }
+  }
+  EXPECT_GT(published.size(), 150u);
+  for (const auto& [frame, times] : published)
+    EXPECT_EQ(times, 1) << "frame " << frame;
+}
+
+// Where there are no views the channel does not run: a frame too small for them (Nordland's 64x32: a crop would be
+// enlarged), a panorama, D-LDB, lateral_shift (the whole image has views of its own), a map's later session.
+TEST(OnlineDetector, AViewChannelRunsOnlyWhereThereAreViews)
+{
+  OnlineDetector small(shipped("default"));
+  ASSERT_NE(small.viewChannel(), nullptr);
+  FrameInput input;
+  input.image = nordland("summer", 0);
+  input.stamp = 1.0;
+  small.process(input);
+  EXPECT_EQ(small.viewChannel(), nullptr);
+  small.reset();
+  EXPECT_NE(small.viewChannel(), nullptr);
+  Config ring = shipped("default");
+  ring.camera_type = "panoramic";
+  EXPECT_EQ(OnlineDetector(ring).viewChannel(), nullptr);
+  Config dldb = shipped("default");
+  dldb.camera_type = "stereo";
+  dldb.descriptor = "D-LDB";
+  EXPECT_EQ(OnlineDetector(dldb).viewChannel(), nullptr);
+  Config shifted = shipped("default");
+  shifted.lateral_shift = 0.12;
+  EXPECT_EQ(OnlineDetector(shifted).viewChannel(), nullptr);
+  const Config config = shipped("default");
+  SessionMap empty(FrameDescriber(config).layout(), config.toYaml());
+  OnlineDetector first(config, empty, MapMode::Continue, SessionInfo());
+  EXPECT_NE(first.viewChannel(), nullptr);
+  input.image = openable_test::gardensPoint("day_left", 0);
+  first.process(input);
+  SessionMap earlier = first.loopDetector().map();
+  SessionInfo later;
+  later.name = "later";
+  EXPECT_EQ(OnlineDetector(config, earlier, MapMode::Continue, later).viewChannel(), nullptr);
 }
 
 // While no loop is published, a place is judged by its paths near the first pass's pace first (pace_prior): the

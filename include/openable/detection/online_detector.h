@@ -58,7 +58,12 @@ struct OnlineOptions
 /// confirmation. OnlineDetector joins its loop closures with the whole image's.
 struct ViewChannel
 {
-  /// A new stream's channel: `session` as the whole image's (its places are numbered alike).
+  /// A new stream's channel, as OnlineDetector's first constructor builds the whole image's.
+  explicit ViewChannel(const ValidConfig& config)
+    : describer(config), detector(config), decision(*config), confirmation(config->confirm_frames)
+  {
+  }
+  /// The channel of a new session `session` of an empty map, as the whole image's (its places are numbered alike).
   ViewChannel(const ValidConfig& config, SessionInfo session)
     : describer(config),
       detector(config, SessionMap(describer.layout(), config->toYaml()), MapMode::Continue, std::move(session)),
@@ -185,8 +190,9 @@ private:
   /// The input's views shifted left and right (Config::lateral_shift), one descriptor after the other, or none
   /// where there are none (no shift, a ring, a disparity descriptor).
   FrameDescriptor shiftedViews(const FrameDescriber& describer, const FrameInput& input) const;
-  /// Builds the view channel where the configuration asks for one (a new stream numbered as `session`).
-  void startViewChannel(SessionInfo session);
+  /// Builds the view channel where the configuration asks for one: a new stream, or the new session `session` of
+  /// an empty map.
+  void startViewChannel(const SessionInfo* session);
   /// One channel's parts: the whole image's (detector_, decision_, confirmation_) or the view channel's.
   struct Channel
   {

@@ -75,7 +75,7 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, const OnlineOptions& o
     features_(options.feature_bytes)
 {
   checkOptions(options);
-  startViewChannel(SessionInfo());
+  startViewChannel(nullptr);
 }
 
 OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options)
@@ -116,14 +116,18 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, SessionMap map, MapMod
   checkOptions(options);
   // A map's earlier sessions hold the whole image's places alone: the view channel has nothing to match there.
   if (mode == MapMode::Continue && detector_.map().frameCount() == 0)
-    startViewChannel(std::move(session));
+    startViewChannel(&session);
 }
 
-void OnlineDetector::startViewChannel(SessionInfo session)
+void OnlineDetector::startViewChannel(const SessionInfo* session)
 {
-  if (config_.view_channel_shift <= 0.0)
+  // Only where the whole image has no views of its own (lateral_shift), and where views can be cut: not from a ring
+  // (matched at every rotation already) nor from disparity (it does not shift with the image).
+  if (config_.view_channel_shift <= 0.0 || config_.lateral_shift > 0.0 ||
+      config_.camera() == CameraType::Panoramic || describer_.descriptor().needs_disparity)
     return;
-  views_ = std::make_unique<ViewChannel>(ValidConfig(config_.viewChannel()), std::move(session));
+  const ValidConfig views(config_.viewChannel());
+  views_ = session ? std::make_unique<ViewChannel>(views, *session) : std::make_unique<ViewChannel>(views);
   views_on_ = true;
 }
 
@@ -545,6 +549,14 @@ void OnlineDetector::updateConfig(const Config& config)
       changed += (changed.empty() ? "" : ", ") + key.name;
   if (!changed.empty())
     throw Error("cannot change " + changed + " while running: the verifier is built once; restart the detector");
+  // The view channel's places are described as it was started (a map holds the whole image's alone: those keys
+  // do not make maps incompatible, but a running channel cannot change them).
+  for (const char* key : {"view_channel_shift", "view_channel_bits"})
+    if (config.get(key) != config_.get(key))
+      changed += (changed.empty() ? "" : ", ") + std::string(key);
+  if (!changed.empty())
+    throw Error("cannot change " + changed + " while running: the view channel's places are described with them; "
+                "restart the detector");
   detector_.updateMatching(config);  // validates and refuses descriptor keys
   decision_.setOptions(DecisionOptions::from(config));
   confirmation_.setFrames(config.confirm_frames);
