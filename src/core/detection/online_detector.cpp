@@ -22,6 +22,25 @@ void checkOptions(const OnlineOptions& options)
                 " is not allowed; expected radians >= 0 (0 = off)");
 }
 
+/// How far a frame got through a channel's decision: a loop closure (published or pending), one that
+/// verification stopped, one of a run's first frames, or none.
+int decisionProgress(FrameStatus status)
+{
+  switch (status)
+  {
+    case FrameStatus::Published:
+    case FrameStatus::Pending:
+      return 3;
+    case FrameStatus::Unverified:
+    case FrameStatus::FailedVerification:
+      return 2;
+    case FrameStatus::Inconsistent:
+      return 1;
+    default:
+      return 0;
+  }
+}
+
 double millisecondsSince(std::chrono::steady_clock::time_point start)
 {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -456,9 +475,9 @@ std::vector<FrameOutcome> OnlineDetector::joinChannels(FrameOutcome& outcome, st
       joined.push_back(std::move(c));
   std::stable_sort(joined.begin(), joined.end(),
                    [](const FrameOutcome& a, const FrameOutcome& b) { return a.frame < b.frame; });
-  // This frame's own decision: the whole image's, unless only the view channel publishes it or holds it pending.
-  const auto claims = [](const FrameOutcome& o) { return o.published() || o.status == FrameStatus::Pending; };
-  if (!claims(outcome) && claims(viewed))
+  // This frame's own decision: the whole image's, unless the view channel took it further (published or pending,
+  // then stopped by verification, then a run's first frame), so that its status says what the frame got to.
+  if (decisionProgress(viewed.status) > decisionProgress(outcome.status))
   {
     const StageTimes times = outcome.times;
     outcome = viewed;
