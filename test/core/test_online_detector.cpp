@@ -297,6 +297,8 @@ TEST(OnlineDetector, AFrameIsPublishedOnceWhateverChannelsConfirmIt)
   OnlineDetector detector(shipped("default"));
   ASSERT_NE(detector.viewChannel(), nullptr);
   std::map<uint64_t, int> published;
+  std::map<uint64_t, FrameOutcome> reported;
+  int by_views = 0;
   const auto& stream = gardensPointStream("day_right", "day_left");
   for (size_t i = 0; i < stream.size(); ++i)
   {
@@ -304,15 +306,22 @@ TEST(OnlineDetector, AFrameIsPublishedOnceWhateverChannelsConfirmIt)
     input.image = stream[i];
     input.stamp = 1.0 + double(i);
     const FrameOutcome outcome = detector.process(input);
+    reported[outcome.frame] = outcome;
     if (outcome.published())
       ++published[outcome.frame];
     for (const FrameOutcome& c : outcome.confirmed)
     {
       EXPECT_TRUE(c.published());
       ++published[c.frame];
+      by_views += c.view_channel ? 1 : 0;
+      // A frame reported with one channel's decision and confirmed by the other's moves from what was reported.
+      const FrameOutcome& then = reported.at(c.frame);
+      if (then.view_channel != c.view_channel)
+        EXPECT_EQ(c.status_before, then.status) << "frame " << c.frame;
     }
   }
   EXPECT_GT(published.size(), 150u);
+  EXPECT_GT(by_views, 0);  // measured: the whole image alone publishes 180 of these frames, both 190
   for (const auto& [frame, times] : published)
     EXPECT_EQ(times, 1) << "frame " << frame;
 }

@@ -42,6 +42,8 @@ struct FrameOutcome
   /// In `confirmed`: the status it had before (Pending, or, for one of its run's first frames published after the
   /// fact, Inconsistent or Standstill), so a caller that counts statuses moves it from there.
   FrameStatus status_before = FrameStatus::Pending;
+  /// The decision (and loop closure) is the view channel's (Config::view_channel_shift), not the whole image's.
+  bool view_channel = false;
 
   bool published() const
   {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <deque>
 #include <memory>
 #include <set>
 #include <opencv2/core.hpp>
@@ -234,6 +235,14 @@ private:
   bool views_on_ = false;               ///< views_ runs (off for a stream whose images have no views)
   /// Frames a loop closure was published for, while a later one of theirs may still come (joinChannels).
   std::set<uint64_t> published_frames_;
+  /// The status each of the last frames was reported with, and whose it was (the view channel on), oldest first: a
+  /// loop closure the other channel confirms later moves its frame from there (FrameOutcome::status_before).
+  struct Reported
+  {
+    FrameStatus status;
+    bool view_channel;
+  };
+  std::deque<Reported> reported_;
   /// How long a frame stays there: a loop closure comes at most LoopDecision::kMaxJoined stored frames late, each
   /// with its repeats (a standstill); 65,536 frames (about 2 h at 10 Hz) is beyond any run met, and the set stays
   /// within a few MiB even if every frame published.

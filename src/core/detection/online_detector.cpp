@@ -210,6 +210,7 @@ FrameDescriptor OnlineDetector::shiftedViews(const FrameDescriber& describer, co
 FrameOutcome OnlineDetector::matchViews(const FrameInput& input, const FrameOutcome& stored)
 {
   FrameOutcome viewed;
+  viewed.view_channel = true;
   viewed.query = stored.query;
   viewed.stored = true;
   viewed.frame = frames_;
@@ -274,6 +275,12 @@ FrameOutcome OnlineDetector::process(const FrameInput& original)
 {
   FrameOutcome outcome = processFrame(original);
   outcome.frame = frames_++;
+  if (views_)
+  {
+    reported_.push_back({outcome.status, outcome.view_channel});
+    if (reported_.size() > kJoinFrames)
+      reported_.pop_front();
+  }
   return outcome;
 }
 
@@ -475,6 +482,14 @@ std::vector<FrameOutcome> OnlineDetector::joinChannels(FrameOutcome& outcome, st
       joined.push_back(std::move(c));
   std::stable_sort(joined.begin(), joined.end(),
                    [](const FrameOutcome& a, const FrameOutcome& b) { return a.frame < b.frame; });
+  // A frame reported with the other channel's decision moves from that one's status.
+  for (FrameOutcome& c : joined)
+    if (c.frame < frames_ && frames_ - c.frame <= reported_.size())
+    {
+      const Reported& reported = reported_[reported_.size() - (frames_ - c.frame)];
+      if (reported.view_channel != c.view_channel)
+        c.status_before = reported.status;
+    }
   // This frame's own decision: the whole image's, unless the view channel took it further (published or pending,
   // then stopped by verification, then a run's first frame), so that its status says what the frame got to.
   if (decisionProgress(viewed.status) > decisionProgress(outcome.status))
@@ -602,6 +617,7 @@ void OnlineDetector::reset()
   frames_out_of_noise_ = 0;
   still_anchor_.clear();
   published_frames_.clear();
+  reported_.clear();
   if (views_)
   {
     views_->detector.reset();
