@@ -216,11 +216,12 @@ TEST(OfflineTool, CameraInfoVerifiesLoopClosuresAsANodeletWould)
   // (run_resume_frames 0): a frame that verification rejects breaks a run where the plain run goes on, and the
   // line a later frame would resume differs, so "verification only removes loops" would not hold frame by frame.
   // No pace prior (pace_prior 0) for the same reason: the matcher weighs paces while no run is published, and a
-  // run that verification ends earlier leaves the matcher searching where the plain run's is not.
+  // run that verification ends earlier leaves the matcher searching where the plain run's is not. One channel
+  // (view_channel_shift 0): with two, a frame's decision may be either channel's, and a pair not the frame's.
   const std::string base =
       "--config " + std::string(OPENABLE_SOURCE_DIR) +
       "/config/default.yaml --set consistent_frames=4 --set slip_penalty=0 --set run_resume_frames=0 "
-      "--set pace_prior=0 --quiet "
+      "--set pace_prior=0 --set view_channel_shift=0 --quiet "
       "--reference " +
       in + " --output ";
   const std::string camera =

@@ -209,8 +209,8 @@ private:
   /// Joins the two channels' outcomes of this frame and what each confirmed: a frame's first loop closure is kept
   /// (the whole image's where both come at once), a later one of the same frame dropped. `outcome` becomes the
   /// view channel's where only that one published (or holds pending) this frame.
-  std::vector<FrameOutcome> joinChannels(FrameOutcome& outcome, std::vector<FrameOutcome> confirmed, FrameOutcome& viewed,
-                                         std::vector<FrameOutcome> view_confirmed);
+  std::vector<FrameOutcome> joinChannels(FrameOutcome& outcome, std::vector<FrameOutcome> confirmed,
+                                         const FrameOutcome& viewed, std::vector<FrameOutcome> view_confirmed);
   /// The input's verification features (options_.verify with a camera), or null (the note says why).
   std::unique_ptr<FrameFeatures> queryFeatures(const FrameInput& input, FrameOutcome& outcome) const;
   /// The best match's stored info (FrameOutcome::match), looked up by id: storing the query may have evicted it.

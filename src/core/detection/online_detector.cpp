@@ -470,7 +470,8 @@ std::vector<FrameOutcome> OnlineDetector::decideAndConfirm(Channel channel, cons
 }
 
 std::vector<FrameOutcome> OnlineDetector::joinChannels(FrameOutcome& outcome, std::vector<FrameOutcome> confirmed,
-                                                       FrameOutcome& viewed, std::vector<FrameOutcome> view_confirmed)
+                                                       const FrameOutcome& viewed,
+                                                       std::vector<FrameOutcome> view_confirmed)
 {
   const auto first = [this](const FrameOutcome& o) { return published_frames_.insert(o.frame).second; };
   std::vector<FrameOutcome> joined;
@@ -501,8 +502,7 @@ std::vector<FrameOutcome> OnlineDetector::joinChannels(FrameOutcome& outcome, st
   if (outcome.published())
     first(outcome);
   // A frame's loop closures come within the confirmations' reach: kept that long, so the set stays bounded.
-  const uint64_t reach = kJoinFrames;
-  while (!published_frames_.empty() && *published_frames_.begin() + reach < frames_)
+  while (!published_frames_.empty() && *published_frames_.begin() + kJoinFrames < frames_)
     published_frames_.erase(published_frames_.begin());
   return joined;
 }
