@@ -77,6 +77,7 @@ void FrameDescriber::describe(const std::vector<Patch>& patches, uint64_t* out) 
   std::memset(out, 0, sizeof(uint64_t) * layout_.frameWords());
   const DescriptorExtractor& extractor = extractorFor(patches.empty() ? config_.patch_size : patches[0].intensity.cols);
   std::vector<float> values;
+  std::vector<uint64_t> all;  // descriptor_bits: a cell's every bit, before some are kept
   for (int i = 0; i < layout_.cells; ++i)
   {
     uint64_t* cell = out + i * layout_.cell_words;
@@ -87,7 +88,7 @@ void FrameDescriber::describe(const std::vector<Patch>& patches, uint64_t* out) 
     }
     if (layout_.binary)
     {
-      std::vector<uint64_t> all(wordsForBits(row_->length), 0);
+      all.assign(wordsForBits(row_->length), 0);
       extractor.describeBinary(patches[i], all.data());
       keepBitsEvenly(all.data(), row_->length, cell, layout_.cell_length);
       continue;
