@@ -85,8 +85,9 @@ struct Config
   int descriptor_bits = 0;
   /// A second channel (0 = off): the image's centre crop, 1 - 2 x this of the width, matched with the frame's
   /// views shifted left and right (as lateral_shift does), with its own sequences, decision and confirmation. A
-  /// frame's loop closure is the whole image's where that channel has one, else this channel's: the other side of
-  /// a path found without losing what the whole image finds (a faster pace). Loop-closure mode of a new stream, on
+  /// frame's loop closure is the first either channel publishes (the whole image's when both come at once): the
+  /// other side of a path found without losing what the whole image finds (a faster pace). Loop-closure mode of a
+  /// new stream, on
   /// images that have views (mono, or a stereo camera's left image with a mono descriptor; not a panorama, not
   /// D-LDB, not with lateral_shift); maps, sessions and localisation hold and use the whole image's channel alone.
   double view_channel_shift = 0.12;

@@ -40,7 +40,8 @@ struct FrameOutcome
   /// this frame's own outcome when that is published (confirm_frames 0).
   std::vector<FrameOutcome> confirmed;
   /// In `confirmed`: the status it had before (Pending, or, for one of its run's first frames published after the
-  /// fact, Inconsistent or Standstill), so a caller that counts statuses moves it from there.
+  /// fact, Inconsistent or Standstill; with two channels, the status the frame was reported with when the other
+  /// channel's decision was reported), so a caller that counts statuses moves it from there.
   FrameStatus status_before = FrameStatus::Pending;
   /// The decision (and loop closure) is the view channel's (Config::view_channel_shift), not the whole image's.
   bool view_channel = false;

@@ -85,10 +85,9 @@ struct ViewChannel
 /// localisation mode matches against a fixed reference map. Not thread-safe: callers serialise.
 ///
 /// With view_channel_shift (loop-closure mode of a new stream: the first constructor, or an empty map continued) a
-/// second channel (ViewChannel) matches the same
-/// stored frames from their centre crops and shifted views; a frame's loop closure is the first either channel
-/// publishes, the whole image's where both publish it at once. A stream whose images are too small for views
-/// (Preprocessor::hasShiftedViews) switches the channel off until reset().
+/// second channel (ViewChannel) matches the same stored frames from their centre crops and shifted views; a frame's
+/// loop closure is the first either channel publishes, the whole image's where both publish it at once. A stream
+/// whose images are too small for views (Preprocessor::hasShiftedViews) switches the channel off until reset().
 class OnlineDetector
 {
 public:
@@ -208,7 +207,7 @@ private:
   FrameOutcome matchViews(const FrameInput& input, const FrameOutcome& stored);
   /// Joins the two channels' outcomes of this frame and what each confirmed: a frame's first loop closure is kept
   /// (the whole image's where both come at once), a later one of the same frame dropped. `outcome` becomes the
-  /// view channel's where only that one published (or holds pending) this frame.
+  /// view channel's where that one took the frame further (decisionProgress).
   std::vector<FrameOutcome> joinChannels(FrameOutcome& outcome, std::vector<FrameOutcome> confirmed,
                                          const FrameOutcome& viewed, std::vector<FrameOutcome> view_confirmed);
   /// The input's verification features (options_.verify with a camera), or null (the note says why).
