@@ -291,6 +291,27 @@ TEST(OnlineDetector, AViewChannelFindsTheOtherSideOfThePathAndKeepsWhatTheWholeI
   EXPECT_GT(whole_right, 30);
 }
 
+// Issue 21: config/default.yaml stores at most 64 bytes a place, both channels' descriptors together (the whole
+// image's 324 bits of HOG-B in 6 words, 128 of the crop's in 2).
+TEST(OnlineDetector, TheDefaultStoresAtMost64BytesAPlaceInBothChannels)
+{
+  OnlineDetector detector(shipped("default"));
+  ASSERT_NE(detector.viewChannel(), nullptr);
+  FrameInput input;
+  input.image = openable_test::gardensPoint("day_left", 0);
+  input.stamp = 1.0;
+  ASSERT_TRUE(detector.process(input).stored);
+  ASSERT_NE(detector.viewChannel(), nullptr);
+  const size_t whole = sizeof(uint64_t) * detector.loopDetector().map().layout().frameWords();
+  const size_t views = sizeof(uint64_t) * detector.viewChannel()->detector.map().layout().frameWords();
+  EXPECT_EQ(detector.loopDetector().map().frameCount(), 1u);
+  EXPECT_EQ(detector.viewChannel()->detector.map().frameCount(), 1u);
+  EXPECT_EQ(whole, 48u);
+  EXPECT_EQ(views, 16u);
+  EXPECT_LE(whole + views, 64u);
+  RecordProperty("default_bytes_a_place", static_cast<int>(whole + views));
+}
+
 // Both channels may confirm the same frame: it is published once, with the first loop closure that came.
 TEST(OnlineDetector, AFrameIsPublishedOnceWhateverChannelsConfirmIt)
 {
