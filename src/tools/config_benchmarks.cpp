@@ -39,6 +39,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -108,6 +109,21 @@ void randomDescriptor(const openable::DescriptorLayout& layout, std::mt19937_64&
   }
 }
 
+/// N random places of `layout`, held as a map loaded from a file is: exactly its frames.
+std::unique_ptr<openable::PlaceDatabase> randomMap(const openable::DescriptorLayout& layout, size_t n, uint64_t seed)
+{
+  auto db = std::make_unique<openable::PlaceDatabase>(layout);
+  std::mt19937_64 rng(seed);
+  openable::FrameDescriptor d(layout.frameWords());
+  for (size_t i = 0; i < n; ++i)
+  {
+    randomDescriptor(layout, rng, d.data());
+    db->add(d);
+  }
+  db->shrinkToFit();
+  return db;
+}
+
 /// A map of N random places in the layout of `config`, built once per (config, N): the largest take
 /// seconds to fill and gigabytes to hold, so only the most recent one is kept.
 const openable::PlaceDatabase& database(const std::string& config_name, size_t n)
@@ -117,38 +133,41 @@ const openable::PlaceDatabase& database(const std::string& config_name, size_t n
   if (cached && cached_name == config_name && cached->size() == n)
     return *cached;
   cached.reset();
-  const openable::FrameDescriber describer(shipped(config_name));
-  auto db = std::make_unique<openable::PlaceDatabase>(describer.layout());
-  std::mt19937_64 rng(n);
-  openable::FrameDescriptor d(describer.layout().frameWords());
-  for (size_t i = 0; i < n; ++i)
-  {
-    randomDescriptor(describer.layout(), rng, d.data());
-    db->add(d);
-  }
-  db->shrinkToFit();  // as a map loaded from a file is held: exactly its frames
-  cached = std::move(db);
+  cached = randomMap(openable::FrameDescriber(shipped(config_name)).layout(), n, n);
   cached_name = config_name;
   return *cached;
 }
 
-void setBytes(benchmark::State& state, const openable::PlaceDatabase& db)
+/// The one pass over a map's first N descriptors a frame's match is compared with (a sum over every word).
+uint64_t sumOfWords(const openable::PlaceDatabase& db, size_t n)
 {
-  const size_t frame_bytes = sizeof(uint64_t) * db.layout().frameWords();
-  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(db.size() * frame_bytes));
-  state.counters["N"] = double(db.size());
-  state.counters["descriptor_bytes"] = double(frame_bytes);
-  state.counters["map_bytes"] = double(db.bytes());
+  const uint64_t* words = db.data();
+  const size_t count = n * db.layout().frameWords();
+  uint64_t x = 0;
+  for (size_t i = 0; i < count; ++i)
+    x += words[i];
+  return x;
 }
 
-void setTwoChannelBytes(benchmark::State& state, const openable::PlaceDatabase& whole,
-                        const openable::PlaceDatabase& views)
+/// Bytes moved and the map's size, for the maps a frame reads (one, or each channel's), of the same N places.
+void setBytes(benchmark::State& state, std::initializer_list<const openable::PlaceDatabase*> maps)
 {
-  const size_t frame_bytes = sizeof(uint64_t) * (whole.layout().frameWords() + views.layout().frameWords());
-  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(whole.size() * frame_bytes));
-  state.counters["N"] = double(whole.size());
+  size_t frame_bytes = 0, map_bytes = 0;
+  for (const openable::PlaceDatabase* db : maps)
+  {
+    frame_bytes += sizeof(uint64_t) * db->layout().frameWords();
+    map_bytes += db->bytes();
+  }
+  const size_t n = (*maps.begin())->size();
+  state.SetBytesProcessed(int64_t(state.iterations()) * int64_t(n * frame_bytes));
+  state.counters["N"] = double(n);
   state.counters["descriptor_bytes"] = double(frame_bytes);
-  state.counters["map_bytes"] = double(whole.bytes() + views.bytes());
+  state.counters["map_bytes"] = double(map_bytes);
+}
+
+void setBytes(benchmark::State& state, const openable::PlaceDatabase& db)
+{
+  setBytes(state, {&db});
 }
 
 void imageRead(benchmark::State& state)
@@ -285,19 +304,11 @@ void configPaceMatch(benchmark::State& state, const std::string& name, size_t n,
 const openable::PlaceDatabase& viewDatabase(const std::string& config_name, size_t n)
 {
   static std::unique_ptr<openable::PlaceDatabase> cached;
-  if (cached && cached->size() == n)
-    return *cached;
-  cached.reset();
-  const openable::DescriptorLayout layout = openable::descriptorLayout(shipped(config_name).viewChannel());
-  cached = std::make_unique<openable::PlaceDatabase>(layout);
-  std::mt19937_64 rng(n + 1);
-  openable::FrameDescriptor d(layout.frameWords());
-  for (size_t i = 0; i < n; ++i)
+  if (!cached || cached->size() != n)
   {
-    randomDescriptor(layout, rng, d.data());
-    cached->add(d);
+    cached.reset();
+    cached = randomMap(openable::descriptorLayout(shipped(config_name).viewChannel()), n, n + 1);
   }
-  cached->shrinkToFit();
   return *cached;
 }
 
@@ -316,7 +327,7 @@ void configTwoChannelMatch(benchmark::State& state, const std::string& name, siz
     whole();
     viewed();
   }
-  setTwoChannelBytes(state, whole_db, view_db);
+  setBytes(state, {&whole_db, &view_db});
 }
 
 /// One pass over both channels' descriptors.
@@ -325,32 +336,15 @@ void configTwoChannelRead(benchmark::State& state, const std::string& name, size
   const openable::PlaceDatabase& whole_db = database(name, n);
   const openable::PlaceDatabase& view_db = viewDatabase(name, n);
   for (auto _ : state)
-  {
-    uint64_t x = 0;
-    for (const openable::PlaceDatabase* db : {&whole_db, &view_db})
-    {
-      const uint64_t* words = db->data();
-      const size_t count = n * db->layout().frameWords();
-      for (size_t i = 0; i < count; ++i)
-        x += words[i];
-    }
-    benchmark::DoNotOptimize(x);
-  }
-  setTwoChannelBytes(state, whole_db, view_db);
+    benchmark::DoNotOptimize(sumOfWords(whole_db, n) + sumOfWords(view_db, n));
+  setBytes(state, {&whole_db, &view_db});
 }
 
 void configMemoryRead(benchmark::State& state, const std::string& name, size_t n)
 {
   const openable::PlaceDatabase& db = database(name, n);
-  const uint64_t* words = db.data();
-  const size_t count = n * db.layout().frameWords();
   for (auto _ : state)
-  {
-    uint64_t x = 0;
-    for (size_t i = 0; i < count; ++i)
-      x += words[i];
-    benchmark::DoNotOptimize(x);
-  }
+    benchmark::DoNotOptimize(sumOfWords(db, n));
   setBytes(state, db);
 }
 }  // namespace

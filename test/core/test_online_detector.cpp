@@ -338,7 +338,9 @@ TEST(OnlineDetector, AFrameIsPublishedOnceWhateverChannelsConfirmIt)
       // A frame reported with one channel's decision and confirmed by the other's moves from what was reported.
       const FrameOutcome& then = reported.at(c.frame);
       if (then.view_channel != c.view_channel)
+      {
         EXPECT_EQ(c.status_before, then.status) << "frame " << c.frame;
+      }
     }
   }
   EXPECT_GT(published.size(), 150u);

@@ -3,7 +3,6 @@
 #include <array>
 #include <deque>
 #include <memory>
-#include <set>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -232,19 +231,18 @@ private:
   FrameOutcome last_view_outcome_;   ///< the view channel's outcome of it
   std::unique_ptr<ViewChannel> views_;  ///< Config::view_channel_shift in loop-closure mode of a new stream
   bool views_on_ = false;               ///< views_ runs (off for a stream whose images have no views)
-  /// Frames a loop closure was published for, while a later one of theirs may still come (joinChannels).
-  std::set<uint64_t> published_frames_;
-  /// The status each of the last frames was reported with, and whose it was (the view channel on), oldest first: a
-  /// loop closure the other channel confirms later moves its frame from there (FrameOutcome::status_before).
+  /// Each of the last frames as it was reported (the view channel on), oldest first: its status, whose decision it
+  /// was, and whether a loop closure went out for it. A loop closure the other channel confirms later moves its frame
+  /// from that status (FrameOutcome::status_before); a second one of a frame is dropped (joinChannels).
   struct Reported
   {
     FrameStatus status;
     bool view_channel;
+    bool published;
   };
   std::deque<Reported> reported_;
-  /// How long a frame stays there: a loop closure comes at most LoopDecision::kMaxJoined stored frames late, each
-  /// with its repeats (a standstill); 65,536 frames (about 2 h at 10 Hz) is beyond any run met, and the set stays
-  /// within a few MiB even if every frame published.
+  /// Frames kept there: a loop closure comes at most LoopDecision::kMaxJoined stored frames late, each with its
+  /// repeats (a standstill); 65,536 frames (about 2 h at 10 Hz) is beyond any run met, in under 1 MiB.
   static constexpr uint64_t kJoinFrames = uint64_t(1) << 16;
   FrameDescriptor still_anchor_;  ///< the last stored frame that was not within a still camera's noise (stop_distance)
   int still_frames_ = 0;          ///< stored frames in a row since still_anchor_ within that noise

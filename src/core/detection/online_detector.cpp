@@ -277,7 +277,7 @@ FrameOutcome OnlineDetector::process(const FrameInput& original)
   outcome.frame = frames_++;
   if (views_)
   {
-    reported_.push_back({outcome.status, outcome.view_channel});
+    reported_.push_back({outcome.status, outcome.view_channel, outcome.published()});
     if (reported_.size() > kJoinFrames)
       reported_.pop_front();
   }
@@ -473,24 +473,29 @@ std::vector<FrameOutcome> OnlineDetector::joinChannels(FrameOutcome& outcome, st
                                                        const FrameOutcome& viewed,
                                                        std::vector<FrameOutcome> view_confirmed)
 {
-  const auto first = [this](const FrameOutcome& o) { return published_frames_.insert(o.frame).second; };
+  // A frame's first loop closure goes out; it moves its frame from the status the frame was reported with when
+  // that was the other channel's decision. A later one of the same frame is dropped.
+  const auto first = [this](FrameOutcome& c)
+  {
+    Reported* reported = c.frame < frames_ && frames_ - c.frame <= reported_.size()
+                             ? &reported_[reported_.size() - (frames_ - c.frame)]
+                             : nullptr;
+    if (!reported)
+      return true;
+    if (reported->published)
+      return false;
+    reported->published = true;
+    if (reported->view_channel != c.view_channel)
+      c.status_before = reported->status;
+    return true;
+  };
   std::vector<FrameOutcome> joined;
-  for (FrameOutcome& c : confirmed)
-    if (first(c))
-      joined.push_back(std::move(c));
-  for (FrameOutcome& c : view_confirmed)
-    if (first(c))
-      joined.push_back(std::move(c));
+  for (std::vector<FrameOutcome>* channel : {&confirmed, &view_confirmed})
+    for (FrameOutcome& c : *channel)
+      if (first(c))
+        joined.push_back(std::move(c));
   std::stable_sort(joined.begin(), joined.end(),
                    [](const FrameOutcome& a, const FrameOutcome& b) { return a.frame < b.frame; });
-  // A frame reported with the other channel's decision moves from that one's status.
-  for (FrameOutcome& c : joined)
-    if (c.frame < frames_ && frames_ - c.frame <= reported_.size())
-    {
-      const Reported& reported = reported_[reported_.size() - (frames_ - c.frame)];
-      if (reported.view_channel != c.view_channel)
-        c.status_before = reported.status;
-    }
   // This frame's own decision: the whole image's, unless the view channel took it further (published or pending,
   // then stopped by verification, then a run's first frame), so that its status says what the frame got to.
   if (decisionProgress(viewed.status) > decisionProgress(outcome.status))
@@ -499,11 +504,6 @@ std::vector<FrameOutcome> OnlineDetector::joinChannels(FrameOutcome& outcome, st
     outcome = viewed;
     outcome.times = times;
   }
-  if (outcome.published())
-    first(outcome);
-  // A frame's loop closures come within the confirmations' reach: kept that long, so the set stays bounded.
-  while (!published_frames_.empty() && *published_frames_.begin() + kJoinFrames < frames_)
-    published_frames_.erase(published_frames_.begin());
   return joined;
 }
 
@@ -616,7 +616,6 @@ void OnlineDetector::reset()
   still_frames_ = 0;
   frames_out_of_noise_ = 0;
   still_anchor_.clear();
-  published_frames_.clear();
   reported_.clear();
   if (views_)
   {
