@@ -109,14 +109,12 @@ void PaceMatcher::startFromScreen(size_t chunk)
   const Stale& stale = stale_[chunk];
   const size_t end = std::min(stale.end, columns_ - chunk * kChunk);
   const int16_t* screened = old_screen_.data() + pad_ + chunk * kChunk;
+  // The same start for every pace, computed once (a chunk that starts again writes all 17 paces' costs).
+  int16_t* start = old_best_.data() + pad_ + chunk * kChunk;  // M of the last frame: the smallest of those
+  for (size_t i = stale.begin; i < end; ++i)
+    start[i] = screenedCost(screened[i]);
   for (size_t v = 0; v < slopes_.size(); ++v)
-  {
-    int16_t* costs = segment(current(v), chunk, v);
-    for (size_t i = stale.begin; i < end; ++i)
-      costs[i] = screenedCost(screened[i]);
-  }
-  for (size_t i = stale.begin; i < end; ++i)  // M of the last frame: the smallest of those
-    old_best_[pad_ + chunk * kChunk + i] = screenedCost(screened[i]);
+    std::copy(start + stale.begin, start + end, segment(current(v), chunk, v) + stale.begin);
   stale_[chunk] = Stale{};
 }
 
