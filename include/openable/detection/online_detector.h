@@ -58,17 +58,9 @@ struct OnlineOptions
 /// confirmation. OnlineDetector joins its loop closures with the whole image's.
 struct ViewChannel
 {
-  /// A new stream's channel, as OnlineDetector's first constructor builds the whole image's.
-  explicit ViewChannel(const ValidConfig& config)
-    : describer(config), detector(config), decision(*config), confirmation(config->confirm_frames)
-  {
-  }
-  /// The channel of a new session `session` of an empty map, as the whole image's (its places are numbered alike).
+  /// A new stream's channel, in session `session` as the whole image's (its places are numbered alike).
   ViewChannel(const ValidConfig& config, SessionInfo session)
-    : describer(config),
-      detector(config, SessionMap(describer.layout(), config->toYaml()), MapMode::Continue, std::move(session)),
-      decision(*config),
-      confirmation(config->confirm_frames)
+    : describer(config), detector(config, std::move(session)), decision(*config), confirmation(config->confirm_frames)
   {
   }
   FrameDescriber describer;
@@ -189,9 +181,9 @@ private:
   /// The input's views shifted left and right (Config::lateral_shift), one descriptor after the other, or none
   /// where there are none (no shift, a ring, a disparity descriptor).
   FrameDescriptor shiftedViews(const FrameDescriber& describer, const FrameInput& input) const;
-  /// Builds the view channel where the configuration asks for one: a new stream, or the new session `session` of
-  /// an empty map.
-  void startViewChannel(const SessionInfo* session);
+  /// Builds the view channel where the configuration asks for one (a new stream, or the new session of an empty
+  /// map), in the whole image's session.
+  void startViewChannel();
   /// One channel's parts: the whole image's (detector_, decision_, confirmation_) or the view channel's.
   struct Channel
   {
@@ -227,7 +219,8 @@ private:
   bool has_last_stored_ = false;
   FrameDescriptor last_stored_;  ///< the last stored frame's descriptor (standstill)
   FrameOutcome last_outcome_;    ///< and its outcome: a frame standing still repeats it
-  FrameOutcome last_whole_outcome_;  ///< the whole image's channel's outcome of it (its confirmation's repeats)
+  FrameOutcome last_whole_outcome_;  ///< the whole image's channel's outcome of it (its confirmation's repeats;
+                                     ///< last_outcome_ is the two channels' joined)
   FrameOutcome last_view_outcome_;   ///< the view channel's outcome of it
   std::unique_ptr<ViewChannel> views_;  ///< Config::view_channel_shift in loop-closure mode of a new stream
   bool views_on_ = false;               ///< views_ runs (off for a stream whose images have no views)

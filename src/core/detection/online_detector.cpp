@@ -94,7 +94,7 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, const OnlineOptions& o
     features_(options.feature_bytes)
 {
   checkOptions(options);
-  startViewChannel(nullptr);
+  startViewChannel();
 }
 
 OnlineDetector::OnlineDetector(const Config& config, PlaceDatabase reference_map, const OnlineOptions& options)
@@ -126,7 +126,7 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, SessionMap map, MapMod
   : config_(*config),
     options_(options),
     describer_(config),
-    detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, session),
+    detector_(config, nonEmptyWhenLocalising(std::move(map), mode), mode, std::move(session)),
     decision_(*config),
     confirmation_(config->confirm_frames),
     metric_(describer_.layout()),
@@ -135,18 +135,18 @@ OnlineDetector::OnlineDetector(const ValidConfig& config, SessionMap map, MapMod
   checkOptions(options);
   // A map's earlier sessions hold the whole image's places alone: the view channel has nothing to match there.
   if (mode == MapMode::Continue && detector_.map().frameCount() == 0)
-    startViewChannel(&session);
+    startViewChannel();
 }
 
-void OnlineDetector::startViewChannel(const SessionInfo* session)
+void OnlineDetector::startViewChannel()
 {
   // Only where the whole image has no views of its own (lateral_shift), and where views can be cut: not from a ring
   // (matched at every rotation already) nor from disparity (it does not shift with the image).
   if (config_.view_channel_shift <= 0.0 || config_.lateral_shift > 0.0 ||
       config_.camera() == CameraType::Panoramic || describer_.descriptor().needs_disparity)
     return;
-  const ValidConfig views(config_.viewChannel());
-  views_ = session ? std::make_unique<ViewChannel>(views, *session) : std::make_unique<ViewChannel>(views);
+  const SessionInfo& session = detector_.map().session(static_cast<uint32_t>(detector_.ownSession()));
+  views_ = std::make_unique<ViewChannel>(ValidConfig(config_.viewChannel()), session);
   views_on_ = true;
 }
 
@@ -354,7 +354,7 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
       return repeated;
     };
     // A pending loop closure's repeats wait with it, in each channel.
-    confirmation_.repeated(repeat(views_on_ ? last_whole_outcome_ : last_outcome_));
+    confirmation_.repeated(repeat(last_whole_outcome_));
     if (views_on_)
       views_->confirmation.repeated(repeat(last_view_outcome_));
     return repeat(last_outcome_);
@@ -398,9 +398,9 @@ FrameOutcome OnlineDetector::processFrame(const FrameInput& original)
   start = std::chrono::steady_clock::now();
   std::unique_ptr<FrameFeatures> query = queryFeatures(input, outcome);
   std::vector<FrameOutcome> confirmed = decideAndConfirm({detector_, decision_, confirmation_}, query.get(), outcome);
+  last_whole_outcome_ = outcome;
   if (views_on_)
   {
-    last_whole_outcome_ = outcome;
     std::vector<FrameOutcome> view_confirmed =
         decideAndConfirm({views_->detector, views_->decision, views_->confirmation}, query.get(), viewed);
     last_view_outcome_ = viewed;
