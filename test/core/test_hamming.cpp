@@ -108,6 +108,51 @@ TEST(Hamming, RowKernelsEqualPairwiseDistancesOnPackedSmallRows)
     }
 }
 
+// The nearest of a frame and its shifted views to each row: every kernel against the smallest naive bit count, on
+// packed rows (the fused AVX-512 path for up to 4 queries and its fallback beyond) and strided ones, with
+// counts around multiples of 8 and past a block of 256.
+TEST(Hamming, RowNearestEqualsTheSmallestNaiveDistanceOfAnyQuery)
+{
+  std::mt19937_64 rng(23);
+  for (size_t words : {1u, 2u, 3u, 6u, 8u, 9u, 22u})
+    for (size_t stride : {words, words + 3})
+      for (size_t nq : {1u, 2u, 3u, 4u, 5u})
+        for (size_t count : {0u, 1u, 7u, 8u, 9u, 300u})
+        {
+          const auto query_words = randomWords(rng, nq * words);
+          // Rows near the first query, so that every query is sometimes the nearest.
+          auto rows = randomWords(rng, stride * count + 1);
+          for (size_t i = 0; i < count; i += 3)
+            std::copy(query_words.begin() + static_cast<long>((i % nq) * words),
+                      query_words.begin() + static_cast<long>((i % nq + 1) * words),
+                      rows.begin() + static_cast<long>(i * stride));
+          std::vector<const uint64_t*> queries;
+          for (size_t q = 0; q < nq; ++q)
+            queries.push_back(query_words.data() + q * words);
+          for (HammingKernel k : supportedKernels())
+          {
+            std::vector<uint32_t> out(count + 1, 12345u);
+            hammingRowNearest(k, queries.data(), nq, rows.data(), stride, words, count, out.data());
+            for (size_t i = 0; i < count; ++i)
+            {
+              uint32_t nearest = UINT32_MAX;
+              for (size_t q = 0; q < nq; ++q)
+                nearest = std::min(nearest, naiveBitCount(queries[q], rows.data() + i * stride, words));
+              ASSERT_EQ(out[i], nearest) << kernelName(k) << " words=" << words << " stride=" << stride
+                                         << " queries=" << nq << " count=" << count << " row " << i;
+            }
+            EXPECT_EQ(out[count], 12345u) << kernelName(k) << ": wrote past the row";
+          }
+        }
+}
+
+TEST(Hamming, RowNearestWithoutAQueryIsAClearError)
+{
+  const uint64_t row = 0;
+  uint32_t out = 0;
+  EXPECT_THROW(hammingRowNearest(nullptr, 0, &row, 1, 1, 1, &out), Error);
+}
+
 // The fused difference of two rows (the sequence recurrence's entering minus leaving term): packed rows of up
 // to 9 words (the AVX-512 fused path and its fallback) and strided ones, every count around multiples of 8.
 TEST(Hamming, RowDifferenceEqualsDifferenceOfNaiveDistances)

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <utility>
 #include <vector>
@@ -325,4 +326,65 @@ TEST(SequenceMatcher, BadInput)
   PlaceDatabase other(binaryLayout(2));
   const uint64_t q[2] = {0, 0};
   EXPECT_THROW(m.match(q, other, 0), Error);
+}
+
+// A frame and its shifted views against a row (PaceMatcher's views): each row's smallest distance to any query,
+// for plain binary rows (the Hamming kernels), sub-panoramas (the shifted metric) and unit float vectors.
+TEST(FrameMetric, RowNearestIsEachRowsSmallestDistanceToAnyQuery)
+{
+  std::mt19937_64 rng(13);
+  DescriptorLayout floats;
+  floats.binary = false;
+  floats.cell_length = 4;
+  floats.cell_words = 2;
+  for (const DescriptorLayout& layout : {binaryLayout(2), binaryLayout(1, 4), floats})
+  {
+    const FrameMetric metric(layout);
+    const size_t words = layout.frameWords();
+    const size_t count = 21, nq = 3;
+    std::vector<uint64_t> rows, query_words;
+    const auto randomFrame = [&] {
+      if (layout.binary)
+        return openable_test::randomWords(rng, words);
+      std::normal_distribution<float> normal;
+      std::vector<float> v(layout.cell_length);
+      float norm = 0.0f;
+      for (float& x : v)
+      {
+        x = normal(rng);
+        norm += x * x;
+      }
+      for (float& x : v)
+        x /= std::sqrt(norm);
+      std::vector<uint64_t> frame(words);
+      std::memcpy(frame.data(), v.data(), v.size() * sizeof(float));
+      return frame;
+    };
+    for (size_t i = 0; i < count + nq; ++i)
+    {
+      const auto frame = randomFrame();
+      (i < count ? rows : query_words).insert((i < count ? rows : query_words).end(), frame.begin(), frame.end());
+    }
+    std::vector<const uint64_t*> queries;
+    for (size_t q = 0; q < nq; ++q)
+      queries.push_back(query_words.data() + q * words);
+    std::vector<uint32_t> out(count);
+    metric.rowNearest(queries.data(), nq, rows.data(), count, out.data());
+    size_t won[3] = {0, 0, 0};
+    for (size_t i = 0; i < count; ++i)
+    {
+      uint32_t nearest = UINT32_MAX;
+      size_t which = 0;
+      for (size_t q = 0; q < nq; ++q)
+      {
+        const uint32_t d = metric.distance(queries[q], rows.data() + i * words);
+        if (d < nearest)
+          nearest = d, which = q;
+      }
+      ASSERT_EQ(out[i], nearest) << "row " << i << (layout.binary ? " binary" : " float");
+      ++won[which];
+    }
+    EXPECT_GT(won[1] + won[2], 0u) << "a view never the nearest: the test would not see it ignored";
+    EXPECT_THROW(metric.rowNearest(queries.data(), 0, rows.data(), count, out.data()), Error);
+  }
 }

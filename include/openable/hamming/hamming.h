@@ -34,6 +34,14 @@ void hammingRow(const uint64_t* query, const uint64_t* rows, size_t stride, size
 void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* rows, size_t stride, size_t words,
                 size_t count, uint32_t* out);
 
+/// out[i] = the smallest hamming(queries[q], rows + i * stride, words) over q < nq (nq >= 1, else Error): a frame
+/// and its views shifted sideways against each stored row, every row read once (on AVX-512 with packed small rows,
+/// the minimum taken in registers).
+void hammingRowNearest(const uint64_t* const* queries, size_t nq, const uint64_t* rows, size_t stride, size_t words,
+                       size_t count, uint32_t* out);
+void hammingRowNearest(HammingKernel kernel, const uint64_t* const* queries, size_t nq, const uint64_t* rows,
+                       size_t stride, size_t words, size_t count, uint32_t* out);
+
 /// out[i] = hamming(qa, rows_a + i * stride, words) - hamming(qb, rows_b + i * stride, words) for i < count:
 /// the entering minus the leaving term of a sequence sum (sequence_matcher.h), both rows read in one pass and,
 /// on AVX-512 with packed small rows, summed in one horizontal step.

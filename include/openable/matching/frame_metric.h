@@ -29,6 +29,9 @@ public:
   }
   /// out[i] = distance(query, rows + i * frameWords()) for i < count.
   void row(const uint64_t* query, const uint64_t* rows, size_t count, uint32_t* out) const;
+  /// out[i] = the smallest distance(queries[q], rows + i * frameWords()) over q < nq (nq >= 1): a frame and its
+  /// views shifted sideways, each row read once (hammingRowNearest for plain binary layouts).
+  void rowNearest(const uint64_t* const* queries, size_t nq, const uint64_t* rows, size_t count, uint32_t* out) const;
   /// out[i] = distance(qa, rows_a + i * frameWords()) - distance(qb, rows_b + i * frameWords()) for i < count,
   /// in one pass over both (hammingRowDifference for plain binary layouts).
   void rowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,

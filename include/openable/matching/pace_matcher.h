@@ -303,7 +303,7 @@ private:
   size_t pool_slots_ = 0;  ///< slots of the pool while pooled_
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;       ///< frame distances
-  std::vector<uint32_t> view_raw_;  ///< a shifted view's frame distances, before raw_ takes the smaller
+  std::vector<const uint64_t*> query_views_;  ///< the frame, then its shifted views: rowNearest's queries
   AlignedCosts entry_;              ///< the entry terms of the kernel
   AlignedCosts extra_;
   AlignedCosts smallest_;

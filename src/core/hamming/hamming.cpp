@@ -146,6 +146,22 @@ void hammingRow(HammingKernel kernel, const uint64_t* query, const uint64_t* row
   checkedKernel(kernel).row(query, rows, stride, words, count, out);
 }
 
+void hammingRowNearest(const uint64_t* const* queries, size_t nq, const uint64_t* rows, size_t stride, size_t words,
+                       size_t count, uint32_t* out)
+{
+  if (nq == 0)
+    throw Error("hammingRowNearest: no query");
+  best().nearest(queries, nq, rows, stride, words, count, out);
+}
+
+void hammingRowNearest(HammingKernel kernel, const uint64_t* const* queries, size_t nq, const uint64_t* rows,
+                       size_t stride, size_t words, size_t count, uint32_t* out)
+{
+  if (nq == 0)
+    throw Error("hammingRowNearest: no query");
+  checkedKernel(kernel).nearest(queries, nq, rows, stride, words, count, out);
+}
+
 void hammingRowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
                           size_t stride, size_t words, size_t count, int32_t* out)
 {

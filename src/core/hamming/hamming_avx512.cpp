@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <new>
 
 #include "hamming/hamming_kernels.h"
 
@@ -124,6 +125,38 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowA
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), packed.sums(packed.counts(rows + i * W)));
   for (; i < count; ++i)
     out[i] = pairAvx512Inline(q, rows + i * W, W);
+}
+
+// The nearest of several queries to each row (a frame and its views shifted sideways): every block of eight rows
+// is loaded once and its distances to each query, eight 64-bit sums, are reduced by one vpminuq a query, so the
+// views cost their popcounts, not a row of distances stored and read back. At most kMostNearestQueries queries
+// (their patterns stay in registers); PackedRows holds only vectors, so nothing needs destroying.
+constexpr size_t kMostNearestQueries = 4;
+
+template <size_t W>
+__attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowNearestAvx512Packed(
+    const uint64_t* const* queries, size_t nq, const uint64_t* rows, size_t count, uint32_t* out)
+{
+  alignas(PackedRows<W>) unsigned char storage[kMostNearestQueries][sizeof(PackedRows<W>)];
+  const PackedRows<W>* packed[kMostNearestQueries];
+  for (size_t q = 0; q < nq; ++q)
+    packed[q] = new (storage[q]) PackedRows<W>(queries[q]);
+  size_t i = 0;
+  for (; i + 8 <= count; i += 8)
+  {
+    const uint64_t* block = rows + i * W;
+    __m512i nearest = packed[0]->wordSums(packed[0]->counts(block));
+    for (size_t q = 1; q < nq; ++q)
+      nearest = _mm512_min_epu64(nearest, packed[q]->wordSums(packed[q]->counts(block)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), _mm512_cvtepi64_epi32(nearest));
+  }
+  for (; i < count; ++i)
+  {
+    uint32_t nearest = pairAvx512Inline(queries[0], rows + i * W, W);
+    for (size_t q = 1; q < nq; ++q)
+      nearest = std::min(nearest, pairAvx512Inline(queries[q], rows + i * W, W));
+    out[i] = nearest;
+  }
 }
 
 // The difference of two rows' distances with one reduction: per word, count_a + 64 - count_b lies in 0 .. 128
@@ -330,6 +363,27 @@ __attribute__((target("avx512f,avx512vpopcntdq"))) void rowAvx512(const uint64_t
     out[i] = static_cast<uint32_t>(_mm512_reduce_add_epi64(total));
   }
 }
+__attribute__((target("avx512f,avx512vpopcntdq"))) void rowNearestAvx512(const uint64_t* const* queries, size_t nq,
+                                                                         const uint64_t* rows, size_t stride,
+                                                                         size_t words, size_t count, uint32_t* out)
+{
+  if (words >= 1 && words <= 8 && stride == words && nq <= kMostNearestQueries && hasVbmi())
+  {
+    using Packed = void (*)(const uint64_t* const*, size_t, const uint64_t*, size_t, uint32_t*);
+    static const Packed packed[9] = {nullptr,
+                                     rowNearestAvx512Packed<1>,
+                                     rowNearestAvx512Packed<2>,
+                                     rowNearestAvx512Packed<3>,
+                                     rowNearestAvx512Packed<4>,
+                                     rowNearestAvx512Packed<5>,
+                                     rowNearestAvx512Packed<6>,
+                                     rowNearestAvx512Packed<7>,
+                                     rowNearestAvx512Packed<8>};
+    packed[words](queries, nq, rows, count, out);
+    return;
+  }
+  rowNearestOf<rowAvx512>(queries, nq, rows, stride, words, count, out);
+}
 // Both distances of every row from one read of it (the chain step's entering and leaving terms): up to three
 // vectors (LDB: 22 words), both queries in registers, and one horizontal sum for the two, the second's
 // per-lane counts (at most 192) added 32 bits up.
@@ -446,7 +500,8 @@ uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* qb, const uint64_t*
 
 Kernel avx512Kernel()
 {
-  return {pairAvx512, rowAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>, chainStepAvx512<uint16_t>};
+  return {pairAvx512,          rowAvx512, rowNearestAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>,
+          chainStepAvx512<uint16_t>};
 }
 
 }  // namespace hamming_kernels

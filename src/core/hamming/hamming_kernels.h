@@ -20,6 +20,8 @@ using PairFn = uint32_t (*)(const uint64_t*, const uint64_t*, size_t);
 using RowFn = void (*)(const uint64_t*, const uint64_t*, size_t, size_t, size_t, uint32_t*);
 using RowDifferenceFn = void (*)(const uint64_t*, const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t,
                                  size_t, int32_t*);
+/// out[i] = the smallest distance of row i to any of the `nq` queries (a frame and its shifted views).
+using RowNearestFn = void (*)(const uint64_t* const*, size_t, const uint64_t*, size_t, size_t, size_t, uint32_t*);
 /// out_a[i] and out_b[i]: the distances of row i to qa and to qb (the chain step's entering and leaving terms).
 using RowPairFn = void (*)(const uint64_t*, const uint64_t*, const uint64_t*, size_t, size_t, size_t, uint32_t*,
                            uint32_t*);
@@ -32,6 +34,7 @@ struct Kernel
 {
   PairFn pair;
   RowFn row;
+  RowNearestFn nearest;
   RowDifferenceFn difference;
   ChainStepFn<uint32_t> step;
   ChainStepFn<uint16_t> step16;
@@ -44,6 +47,28 @@ void rowDifferenceOf(const uint64_t* qa, const uint64_t* rows_a, const uint64_t*
 {
   for (size_t i = 0; i < count; ++i)
     out[i] = int32_t(pair(qa, rows_a + i * stride, words)) - int32_t(pair(qb, rows_b + i * stride, words));
+}
+
+/// The nearest of several queries through a kernel's row function, a block of rows at a time (the block's rows
+/// stay in cache for every query).
+template <RowFn row>
+void rowNearestOf(const uint64_t* const* queries, size_t nq, const uint64_t* rows, size_t stride, size_t words,
+                  size_t count, uint32_t* out)
+{
+  constexpr size_t kBlock = 256;
+  uint32_t other[kBlock];
+  for (size_t begin = 0; begin < count; begin += kBlock)
+  {
+    const size_t n = std::min(kBlock, count - begin);
+    const uint64_t* block = rows + begin * stride;
+    row(queries[0], block, stride, words, n, out + begin);
+    for (size_t q = 1; q < nq; ++q)
+    {
+      row(queries[q], block, stride, words, n, other);
+      for (size_t i = 0; i < n; ++i)
+        out[begin + i] = std::min(out[begin + i], other[i]);
+    }
+  }
 }
 
 /// Both rows of distances through a kernel's row function, one after the other (the rows stay in cache).
@@ -85,7 +110,7 @@ uint32_t chainStepOf(const uint64_t* qa, const uint64_t* qb, const uint64_t* row
 template <PairFn pair, RowFn row>
 Kernel kernelOf()
 {
-  return {pair, row, rowDifferenceOf<pair>, chainStepOf<rowPairOf<row>, uint32_t>,
+  return {pair, row, rowNearestOf<row>, rowDifferenceOf<pair>, chainStepOf<rowPairOf<row>, uint32_t>,
           chainStepOf<rowPairOf<row>, uint16_t>};
 }
 

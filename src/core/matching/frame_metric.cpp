@@ -85,6 +85,26 @@ void FrameMetric::row(const uint64_t* query, const uint64_t* rows, size_t count,
     out[i] = distance(query, rows + i * stride);
 }
 
+void FrameMetric::rowNearest(const uint64_t* const* queries, size_t nq, const uint64_t* rows, size_t count,
+                             uint32_t* out) const
+{
+  if (nq == 0)
+    throw Error("FrameMetric::rowNearest: no query");
+  const size_t stride = layout_.frameWords();
+  if (layout_.binary && layout_.blocks == 1)
+  {
+    hammingRowNearest(queries, nq, rows, stride, stride, count, out);
+    return;
+  }
+  for (size_t i = 0; i < count; ++i)
+  {
+    uint32_t nearest = distance(queries[0], rows + i * stride);
+    for (size_t q = 1; q < nq; ++q)
+      nearest = std::min(nearest, distance(queries[q], rows + i * stride));
+    out[i] = nearest;
+  }
+}
+
 void FrameMetric::rowDifference(const uint64_t* qa, const uint64_t* rows_a, const uint64_t* qb, const uint64_t* rows_b,
                                 size_t count, int32_t* out) const
 {

@@ -289,17 +289,15 @@ void PaceMatcher::distances(const uint64_t* query, const uint64_t* shifted, size
   std::fill(raw_.begin(), raw_.begin() + static_cast<long>(first), far);
   std::fill(raw_.begin() + static_cast<long>(first + (high - low)), raw_.begin() + static_cast<long>(m + 2 * tolerance),
             far);
-  metric_.row(query, reference.descriptor(low), high - low, raw_.data() + first);
-  // The chunk's descriptors are in cache now: each shifted view costs its popcounts, not another read of the map.
-  view_raw_.resize(high - low);
+  // The frame and its shifted views against each place in one pass: a view costs its popcounts, not another read
+  // of the map.
   const size_t words = metric_.layout().frameWords();
+  query_views_.resize(1 + views);
+  query_views_[0] = query;
   for (size_t v = 0; v < views; ++v)
-  {
-    metric_.row(shifted + v * words, reference.descriptor(low), high - low, view_raw_.data());
-    uint32_t* own = raw_.data() + first;
-    for (size_t i = 0; i < high - low; ++i)
-      own[i] = std::min(own[i], view_raw_[i]);
-  }
+    query_views_[1 + v] = shifted + v * words;
+  metric_.rowNearest(query_views_.data(), query_views_.size(), reference.descriptor(low), high - low,
+                     raw_.data() + first);
 }
 
 void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, size_t views,
