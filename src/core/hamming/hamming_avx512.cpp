@@ -132,6 +132,12 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowA
 // views cost their popcounts, not a row of distances stored and read back. At most kMostNearestQueries queries
 // (their patterns stay in registers); PackedRows holds only vectors, so nothing needs destroying.
 constexpr size_t kMostNearestQueries = 4;
+// PaceMatcher calls this a chunk of 2048 places at a time, with the screen and the refined paces' costs between two
+// chunks: the rows 4 KB on are prefetched, so the next chunk's first rows are on their way while those run, where the
+// hardware's prefetcher would start again at each chunk. Two channels at 1e6 places, twelve runs each, in turn with
+// and without: 3.89 / 4.03 ms against 4.13 / 4.74 (minimum / median); 2 and 8 KB measured the same as 4. A prefetch
+// past the end of the map reads nothing and never faults.
+constexpr size_t kPrefetchWords = 512;
 
 template <size_t W>
 __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowNearestAvx512Packed(
@@ -145,6 +151,9 @@ __attribute__((target("avx512f,avx512bw,avx512vbmi,avx512vpopcntdq"))) void rowN
   for (; i + 8 <= count; i += 8)
   {
     const uint64_t* block = rows + i * W;
+    const uintptr_t ahead = reinterpret_cast<uintptr_t>(block) + kPrefetchWords * sizeof(uint64_t);
+    for (size_t line = 0; line < W; ++line)  // the block's W cache lines, kPrefetchWords on (an address, not a pointer)
+      _mm_prefetch(reinterpret_cast<const char*>(ahead + 64 * line), _MM_HINT_T0);
     __m512i nearest = packed[0]->wordSums(packed[0]->counts(block));
     for (size_t q = 1; q < nq; ++q)
       nearest = _mm512_min_epu64(nearest, packed[q]->wordSums(packed[q]->counts(block)));
