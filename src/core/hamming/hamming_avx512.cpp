@@ -509,7 +509,11 @@ uint32_t chainStepAvx512(const uint64_t* qa, const uint64_t* qb, const uint64_t*
 
 Kernel avx512Kernel()
 {
-  return {pairAvx512,          rowAvx512, rowNearestAvx512, rowDifferenceAvx512, chainStepAvx512<uint32_t>,
+  return {pairAvx512,
+          rowAvx512,
+          rowNearestAvx512,
+          rowDifferenceAvx512,
+          chainStepAvx512<uint32_t>,
           chainStepAvx512<uint16_t>};
 }
 
