@@ -83,7 +83,32 @@ def config_table(cpu, counters):
             at_pace += f" | {published / 1e3:,.2f}" if published is not None else " | -"
             print(f"| {config} | {n:,} | {match / 1e3:,.2f} | {memory / 1e3:,.2f} | {match / memory:.2f}x | "
                   f"{map_bytes / 1e6:,.0f} MB | {at_pace} |")
+    two_channel_table(cpu)
     length_table(cpu)
+
+
+def two_channel_table(cpu):
+    """A configuration with a view channel (default.yaml): what a frame of the detector pays, both channels'
+    matchers, against today's matcher (the diagonal sums, one channel) and one read of both channels' maps."""
+    rows = []
+    for config in ("gardens_point", "nordland", "default"):
+        for n in (100000, 1000000, 10000000):
+            name = f"{config}/{n}"
+            two, read = cpu.get(f"BM_ConfigTwoChannelMatch/{name}"), cpu.get(f"BM_ConfigTwoChannelRead/{name}")
+            today, one = cpu.get(f"BM_ConfigMatch/{name}"), cpu.get(f"BM_ConfigPaceMatch/{name}")
+            if two is None or read is None or today is None:
+                continue
+            one_channel = f"{one / 1e3:,.2f}" if one is not None else "-"
+            rows.append(f"| {config} | {n:,} | {today / 1e3:,.2f} | {one_channel} | {two / 1e3:,.2f} | "
+                        f"{read / 1e3:,.2f} | {two / today:.1f}x | {two / read:.2f}x |")
+    if not rows:
+        return
+    print()
+    print("| config | N | today's matcher (ms/frame) | one channel at any pace (ms/frame) | two channels (ms/frame) "
+          "| read of both maps (ms) | two channels / today's | two channels / read |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for row in rows:
+        print(row)
 
 
 def length_table(cpu):
