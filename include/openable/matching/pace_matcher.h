@@ -194,9 +194,8 @@ private:
   /// Keeps the rows aligned with the reference: drops evicted places, appends new ones at `prior`.
   void align(const PlaceDatabase& reference, size_t candidates);
   /// raw_ for the chunk of columns [begin, begin + m), with tolerance_ neighbours on each side: the smallest of the
-  /// query's and its `views` shifted views' distances.
-  void distances(const uint64_t* query, const uint64_t* shifted, size_t views, const PlaceDatabase& reference,
-                 size_t begin, size_t m);
+  /// distances of the frame's queries (query_views_, set once a frame by matchShifted).
+  void distances(const PlaceDatabase& reference, size_t begin, size_t m);
   /// A screen cost as a path's cost where a chunk is not refined: plus screen_offset_.
   int16_t screenedCost(int16_t screen) const;
   /// Whether column `column`'s chunk keeps every pace's costs this frame.
@@ -303,7 +302,7 @@ private:
   size_t pool_slots_ = 0;  ///< slots of the pool while pooled_
   // Scratch for one chunk of columns.
   std::vector<uint32_t> raw_;       ///< frame distances
-  std::vector<const uint64_t*> query_views_;  ///< the frame, then its shifted views: rowNearest's queries
+  std::vector<const uint64_t*> query_views_;  ///< this frame's query, then its shifted views (rowNearest's)
   AlignedCosts entry_;              ///< the entry terms of the kernel
   AlignedCosts extra_;
   AlignedCosts smallest_;

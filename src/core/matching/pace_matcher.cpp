@@ -275,8 +275,7 @@ void PaceMatcher::align(const PlaceDatabase& reference, size_t candidates)
   columns_ = candidates;
 }
 
-void PaceMatcher::distances(const uint64_t* query, const uint64_t* shifted, size_t views,
-                            const PlaceDatabase& reference, size_t begin, size_t m)
+void PaceMatcher::distances(const PlaceDatabase& reference, size_t begin, size_t m)
 {
   // raw_[tolerance + i] is the distance of place begin + i; neighbours past either end of the row never win
   // the nearest distance.
@@ -291,11 +290,6 @@ void PaceMatcher::distances(const uint64_t* query, const uint64_t* shifted, size
             far);
   // The frame and its shifted views against each place in one pass: a view costs its popcounts, not another read
   // of the map.
-  const size_t words = metric_.layout().frameWords();
-  query_views_.resize(1 + views);
-  query_views_[0] = query;
-  for (size_t v = 0; v < views; ++v)
-    query_views_[1 + v] = shifted + v * words;
   metric_.rowNearest(query_views_.data(), query_views_.size(), reference.descriptor(low), high - low,
                      raw_.data() + first);
 }
@@ -304,6 +298,12 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
                                const PlaceDatabase& reference, size_t candidates)
 {
   const bool first_row = columns_ == 0;
+  // The frame, then its shifted views: every chunk's distances take the smallest (distances()).
+  const size_t words = metric_.layout().frameWords();
+  query_views_.resize(1 + views);
+  query_views_[0] = query;
+  for (size_t v = 0; v < views; ++v)
+    query_views_[1 + v] = shifted + v * words;
   align(reference, candidates);
   const size_t n = columns_;
   const size_t chunks = chunksOf(n);
@@ -413,7 +413,7 @@ void PaceMatcher::matchShifted(const uint64_t* query, const uint64_t* shifted, s
     chunk.m = std::min(kChunk, n - chunk.begin);
     if (refined_[k])
       prepareChunk(k, chunks, chunk.m, rows);
-    distances(query, shifted, views, reference, chunk.begin, chunk.m);
+    distances(reference, chunk.begin, chunk.m);
     screen.begin = chunk.begin;
     screen.m = chunk.m;
     const pace_kernels::ScreenSums screened_sums = screen_kernel_(screen);
