@@ -223,6 +223,42 @@ TEST(LoopDecision, HeldFramesOfABrokenRunJoinWithinConsistencyTolerance)
   EXPECT_EQ(tight.joinedBefore(), (std::vector<size_t>{1, 2, 3, 4, 5}));
 }
 
+// The frames before a run also join on the line of the best path's pace through the run's last match, where their
+// own path held that pace and the run's line agrees with it within a step of the grid: the run's line through its
+// first and last matches is tilted by a place off at either end (here 39 .. 47 over 3 frames: 2.67 a frame at pace
+// 3). Once a frame is on the path's line alone, the reach-back keeps to that line.
+TEST(LoopDecision, FramesBeforeARunJoinOnTheLineOfItsPathsPace)
+{
+  Config c = decisionConfig();
+  c.consistent_frames = 4;
+  c.consistency_tolerance = 1;
+  c.max_pace = 3;
+  c.run_start_tolerance = 1;
+  const std::vector<uint64_t> before = {25, 27, 30, 33, 36}, run = {39, 42, 45, 47};
+  const auto decideStream = [&](float pace_before)
+  {
+    LoopDecision decision(c);
+    for (uint64_t match : before)
+    {
+      Detection d = candidate(match, 0.05f);  // not unique enough to start a run
+      d.best.pace = pace_before;
+      EXPECT_EQ(decision.decide(d), FrameStatus::NotUnique) << match;
+    }
+    for (size_t k = 0; k < run.size(); ++k)
+    {
+      Detection d = candidate(run[k], 0.3f);
+      d.best.pace = 3.0f;
+      EXPECT_EQ(decision.decide(d), k + 1 < run.size() ? FrameStatus::Inconsistent : FrameStatus::Published) << k;
+    }
+    return decision.joinedBefore();
+  };
+  // On the run's line (47 - 2.67 k): 45, 42, 39, 36, 33 and 30 (31.0, 1 off); 27 is 1.33 off it, and 1 off the
+  // path's line (47 - 3 k = 26), so it joins there; 25 lies on the run's line (25.7) but 2 off the path's: not taken.
+  EXPECT_EQ(decideStream(3.0f), (std::vector<size_t>{1, 2, 3, 4, 5, 6, 7}));
+  // Frames whose path went at another pace: the run's line alone (27 passed over as not unique, 25 on it).
+  EXPECT_EQ(decideStream(1.0f), (std::vector<size_t>{1, 2, 3, 4, 5, 6, 8}));
+}
+
 // A published run broken by a dip of uniqueness resumes where a frame's match lies on its line, extended, at
 // continue_uniqueness (run_resume_frames); never off the line, never after run_resume_frames frames, never with 0.
 TEST(LoopDecision, ABrokenRunResumesOnItsLineWithinRunResumeFrames)
@@ -294,7 +330,7 @@ void expectNaiveReference(bool geometry)
   for (int trial = 0; trial < 50; ++trial)
   {
     Config c = decisionConfig();
-    c.consistent_frames = 1 + trial % 5;
+    c.consistent_frames = 1 + trial % 10;
     c.consistency_tolerance = trial % 3;
     c.verified_min_uniqueness = geometry ? 0.05 : -1.0;
     c.run_start_tolerance = trial % 3 - 1;
@@ -310,6 +346,8 @@ void expectNaiveReference(bool geometry)
           kind < 6 ? match + 1 : (kind < 8 ? match + std::uniform_int_distribution<int>(0, 4)(rng) : 300 - match % 50);
       const float u = std::uniform_real_distribution<float>(0.0f, 0.3f)(rng);
       seen.push_back(candidate(match, u));
+      // Most frames' paths at the first pass's pace, some a step of the grid faster (the path's line, below).
+      seen.back().best.pace = std::uniform_int_distribution<int>(0, 3)(rng) == 0 ? 1.15f : 1.0f;
       verified.push_back(std::bernoulli_distribution(0.5)(rng));
       // Naive: the run is the longest suffix of passing frames where every step and the whole span advance
       // one place per frame within the tolerance.
@@ -358,6 +396,11 @@ void expectNaiveReference(bool geometry)
         if (run == c.consistent_frames && c.run_start_tolerance >= 0 && run > 1)
         {
           const double slope = (matches.back() - matches.front()) / static_cast<double>(matches.size() - 1);
+          // Or on the line of this frame's path pace, for frames whose path held it, when the run's line agrees
+          // with it within LoopDecision::kPathAgrees; once a frame is on that line alone, only that line.
+          const double pace = seen.back().best.pace;
+          const bool path_agrees = std::fabs(slope - pace) <= LoopDecision::kPathAgrees * pace;
+          bool path_only = false;
           size_t off_line = 0;
           for (size_t back = 1; back <= std::min(statuses.size(), LoopDecision::kMaxJoined); ++back)
           {
@@ -366,8 +409,15 @@ void expectNaiveReference(bool geometry)
                                         (joined.empty() ? back == 1 : joined.back() == back - 1);
             const int tolerance =
                 held_run_frame ? std::max(c.run_start_tolerance, c.consistency_tolerance) : c.run_start_tolerance;
-            if (std::fabs(double(seen[seen.size() - 1 - back].best.id) - line) <= tolerance)
+            const Detection& earlier = seen[seen.size() - 1 - back];
+            const bool on_run_line = !path_only && std::fabs(double(earlier.best.id) - line) <= tolerance;
+            const bool on_path_line =
+                path_agrees && std::fabs(earlier.best.pace - pace) <= LoopDecision::kSamePace * pace &&
+                std::fabs(double(earlier.best.id) - (matches.back() - pace * static_cast<double>(back))) <=
+                    c.run_start_tolerance;
+            if (on_run_line || on_path_line)
             {
+              path_only = path_only || !on_run_line;
               joined.push_back(back);
               off_line = 0;
             }

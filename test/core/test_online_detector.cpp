@@ -421,7 +421,9 @@ TEST(OnlineDetector, ABrokenRunResumesOnItsLineAndNoWrongLoop)
   Config off = with;
   ASSERT_GT(off.run_resume_frames, 0);
   off.run_resume_frames = 0;
-  for (const auto& [first, second, gain] : {std::tuple<const char*, const char*, double>{"day_right", "day_left", 0.04},
+  // day_right then day_left: 0.835 -> 0.900 when frames before a run joined on the run's line only; since they also
+  // join on the line of its path's pace, the run that starts afresh takes most of them (0.910 -> 0.930).
+  for (const auto& [first, second, gain] : {std::tuple<const char*, const char*, double>{"day_right", "day_left", 0.015},
                                             {"day_left", "day_right", 0.08},
                                             {"day_right", "night_right", -0.015}})
     expectMoreLoopsAndNoWrongOne(gardensPointStream(first, second), 200, with, off, gain,

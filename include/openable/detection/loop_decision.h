@@ -117,6 +117,12 @@ public:
   /// for a frame or two. Measured on 90 pace streams (doc/results.md "A run reaches further back"): summed recall
   /// +0.26 / +0.49 / +0.54 for 1 / 2 / 14 more wrong loops at 1 / 2 / 3 frames.
   static constexpr size_t kMaxSkipped = 2;
+  /// A frame before a run joins on the line of the run's best path's pace only where its own best path's pace was
+  /// within this fraction of it (framesOnLineBefore): the same pace of the 17 followed (they lie 15 % apart).
+  static constexpr double kSamePace = 0.05;
+  /// ... and where the run's own line (through its first and last matches) lies within this fraction of that pace:
+  /// one step of the grid, the run and its path telling the same pace.
+  static constexpr double kPathAgrees = 0.15;
   /// Frames whose Detection::relief the min_relief gate takes the median of: one frame's is noisy (a passing
   /// train, a lamp post), a stretch of look-alike places lasts tens of frames.
   static constexpr size_t kReliefFrames = 5;
@@ -166,7 +172,8 @@ private:
   void endRun();
   /// The frames before this one that may join, with matches within run_start_tolerance of the run's line
   /// (joinedBefore).
-  std::vector<size_t> framesOnLineBefore() const;
+  /// `pace`: the best path's pace at this frame (places a frame, signed by direction).
+  std::vector<size_t> framesOnLineBefore(double pace) const;
   /// The slope of the run's recent matches (places per frame; 0 with fewer than two).
   double runSlope() const;
   /// The last published frame is at most run_resume_frames frames back, its run broke, and this frame's match lies
@@ -222,6 +229,7 @@ private:
     /// As decided: a Published frame's loop closure may still be pending when its run breaks; a NotUnique one off a
     /// later run's line is a look-alike place the reach-back may pass over.
     FrameStatus status;
+    double pace;  ///< its best path's pace (places a frame, signed by direction)
   };
   std::deque<Past> past_;
   std::deque<float> reliefs_;  ///< Detection::relief of the last kReliefFrames frames that had one

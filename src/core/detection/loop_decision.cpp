@@ -257,7 +257,8 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
   const bool may_be_late =
       status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
   const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
-  past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join, status});
+  past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join, status,
+                       detection.best.pace * detection.best.direction});
   if (past_.size() > kMaxJoined + 1)
     past_.pop_front();
   return status;
@@ -379,7 +380,7 @@ FrameStatus LoopDecision::resumeRun(const Detection& detection, double slope)
   previous_direction_ = detection.best.direction;
   previous_session_ = detection.best.session;
   published_ = true;
-  joined_before_ = framesOnLineBefore();
+  joined_before_ = framesOnLineBefore(detection.best.pace * detection.best.direction);
   return FrameStatus::Published;
 }
 
@@ -433,11 +434,11 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
     return resumeRun(detection, detection.best.pace * detection.best.direction);
   }
   if (published_ && !was_published)
-    joined_before_ = framesOnLineBefore();
+    joined_before_ = framesOnLineBefore(detection.best.pace * detection.best.direction);
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
 }
 
-std::vector<size_t> LoopDecision::framesOnLineBefore() const
+std::vector<size_t> LoopDecision::framesOnLineBefore(double pace) const
 {
   // The frames a run needs before it is consistent were right where the run is right: its matches were on the
   // line already, and often so were the frames before it that were not unique enough to start it (the revisit
@@ -460,11 +461,24 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
   // back onto the route, and the lagging frames were 2 places off the new run's line: GP day_right then day_left
   // 0.865 -> 0.900. Not across a gap: a stretch of look-alike places leaves the sequence lagging 2 places, every
   // other frame published and not unique in turn (Nordland summer then winter, default.yaml, 4 wrong at 1x).
+  // The run's line is the one through its first and last matches: a place off at either end tilts it, and extended
+  // back ten frames a tilt of a tenth of a place a frame misses by one more (GP day_right then night_right at 3x:
+  // the run's matches 39 .. 65 over 9 frames, slope 2.89, the frames before it 1.1 and 1.2 places off, at pace 3
+  // exactly on). So a frame also joins on the line of the best path's `pace` through the last match, where its own
+  // best path held that pace (within kSamePace): a straight line at the pace the path followed, not across a change
+  // of it (without that condition, 20 more wrong loops on the pace set, where varying and random paces changed between
+  // the run and the frames before it). On the path's line a frame is within run_start_tolerance, never the wider
+  // tolerance of a held run frame: a run that broke 3 places behind the revisit (GP day_left then night_right at the
+  // place server, night_right 41 as day_left 38) would join the next run's line 2 places off. doc/results.md: 3x
+  // 0.761 -> 0.821; summed recall pace 52.13 -> 52.28, holdout 21.63 -> 21.94, short 37.27 -> 37.58, one more wrong
+  // loop over the 220 streams.
   std::vector<size_t> joined;
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return joined;
   const double last = static_cast<double>(recent_.back());
   const double slope = runSlope();
+  const bool path_agrees = std::fabs(slope - pace) <= kPathAgrees * std::fabs(pace);
+  bool path_only = false;  // once a frame is on the path's line alone, the run's line is off there: one line on
   size_t back = 0, skipped = 0;
   for (auto p = past_.rbegin(); p != past_.rend() && back < kMaxJoined; ++p)
   {
@@ -478,8 +492,13 @@ std::vector<size_t> LoopDecision::framesOnLineBefore() const
     const double tolerance = p->status == FrameStatus::Published && follows_joined
                                  ? std::max(options_.run_start_tolerance, options_.consistency_tolerance)
                                  : options_.run_start_tolerance;
-    if (std::fabs(static_cast<double>(p->id) - expected) <= tolerance)
+    const bool on_path_line = path_agrees && std::fabs(p->pace - pace) <= kSamePace * std::fabs(pace) &&
+                              std::fabs(static_cast<double>(p->id) - (last - pace * static_cast<double>(back))) <=
+                                  options_.run_start_tolerance;
+    const bool on_run_line = !path_only && std::fabs(static_cast<double>(p->id) - expected) <= tolerance;
+    if (on_run_line || on_path_line)
     {
+      path_only = path_only || !on_run_line;
       joined.push_back(back);
       skipped = 0;
     }
