@@ -259,6 +259,34 @@ TEST(LoopDecision, FramesBeforeARunJoinOnTheLineOfItsPathsPace)
   EXPECT_EQ(decideStream(1.0f), (std::vector<size_t>{1, 2, 3, 4, 5, 6, 8}));
 }
 
+// On the path's line a frame joins within run_start_tolerance only, never the wider tolerance (consistency_tolerance)
+// of a held frame of a broken run: a run that broke lagging the revisit would join the next run's line places off
+// (the place server, GP day_left then night_right: night_right 41 as day_left 38).
+TEST(LoopDecision, AHeldFrameJoinsOnThePathsLineWithinRunStartToleranceOnly)
+{
+  Config c = decisionConfig();
+  c.consistent_frames = 5;
+  c.consistency_tolerance = 2;
+  c.max_pace = 3;
+  c.run_start_tolerance = 1;
+  LoopDecision decision(c);
+  const auto paced = [](uint64_t match)
+  {
+    Detection d = candidate(match, 0.3f);
+    d.best.pace = 3.0f;
+    return d;
+  };
+  for (uint64_t m : {4, 7, 10, 13})
+    EXPECT_EQ(decision.decide(paced(m)), FrameStatus::Inconsistent) << m;
+  EXPECT_EQ(decision.decide(paced(16)), FrameStatus::Published);  // run A, held as published
+  for (uint64_t m : {22, 25, 28, 31})  // 22 is 3 off A's line (19): A breaks, run B begins
+    EXPECT_EQ(decision.decide(paced(m)), FrameStatus::Inconsistent) << m;
+  EXPECT_EQ(decision.decide(paced(33)), FrameStatus::Published);
+  // B's line: 33 - 2.75 k (A's 16 is 3.25 off it); the path's line at pace 3: 33 - 3 k, A's 16 is 2 off (k = 5):
+  // within the held frame's tolerance of 2, not within run_start_tolerance. Only B's own frames join.
+  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 2, 3, 4}));
+}
+
 // A published run broken by a dip of uniqueness resumes where a frame's match lies on its line, extended, at
 // continue_uniqueness (run_resume_frames); never off the line, never after run_resume_frames frames, never with 0.
 TEST(LoopDecision, ABrokenRunResumesOnItsLineWithinRunResumeFrames)
