@@ -37,6 +37,25 @@ Detection candidate(uint64_t match, float uniqueness, size_t candidates = 100, f
   d.top = {d.best, rival};
   return d;
 }
+
+/// A candidate whose best path holds `pace` (places a frame).
+Detection paced(uint64_t match, float pace, float uniqueness = 0.3f)
+{
+  Detection d = candidate(match, uniqueness);
+  d.best.pace = pace;
+  return d;
+}
+
+/// The reach-back at any pace (max_pace 3, run_start_tolerance 1) with these consistency keys.
+Config reachBackConfig(int consistent_frames, int consistency_tolerance)
+{
+  Config c = decisionConfig();
+  c.consistent_frames = consistent_frames;
+  c.consistency_tolerance = consistency_tolerance;
+  c.max_pace = 3;
+  c.run_start_tolerance = 1;
+  return c;
+}
 }  // namespace
 
 TEST(LoopDecision, StatusWordsAreTheDocumentedOnes)
@@ -123,11 +142,7 @@ TEST(LoopDecision, ReverseRevisitsAdvanceBackwards)
 
 TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
 {
-  Config c = decisionConfig();
-  c.consistent_frames = 5;
-  c.consistency_tolerance = 2;
-  c.max_pace = 3;
-  c.run_start_tolerance = 1;
+  Config c = reachBackConfig(5, 2);
   LoopDecision decision(c);
   for (uint64_t m : {10, 11, 12, 13})
   {
@@ -198,11 +213,7 @@ TEST(LoopDecision, ARunsFirstFramesOnItsLineJoinItWhenItIsPublished)
 // the frame after each joined too; the frames that never passed keep run_start_tolerance.
 TEST(LoopDecision, HeldFramesOfABrokenRunJoinWithinConsistencyTolerance)
 {
-  Config c = decisionConfig();
-  c.consistent_frames = 4;
-  c.consistency_tolerance = 2;
-  c.max_pace = 3;
-  c.run_start_tolerance = 1;
+  Config c = reachBackConfig(4, 2);
   LoopDecision decision(c);
   const std::vector<uint64_t> matches = {13, 14, 16, 17, 18, 21, 22, 22, 23, 23, 24};
   const std::vector<FrameStatus> statuses = {
@@ -229,27 +240,17 @@ TEST(LoopDecision, HeldFramesOfABrokenRunJoinWithinConsistencyTolerance)
 // 3). Once a frame is on the path's line alone, the reach-back keeps to that line.
 TEST(LoopDecision, FramesBeforeARunJoinOnTheLineOfItsPathsPace)
 {
-  Config c = decisionConfig();
-  c.consistent_frames = 4;
-  c.consistency_tolerance = 1;
-  c.max_pace = 3;
-  c.run_start_tolerance = 1;
+  const Config c = reachBackConfig(4, 1);
   const std::vector<uint64_t> before = {25, 27, 30, 33, 36}, run = {39, 42, 45, 47};
   const auto decideStream = [&](float pace_before)
   {
     LoopDecision decision(c);
-    for (uint64_t match : before)
-    {
-      Detection d = candidate(match, 0.05f);  // not unique enough to start a run
-      d.best.pace = pace_before;
-      EXPECT_EQ(decision.decide(d), FrameStatus::NotUnique) << match;
-    }
+    for (uint64_t match : before)  // not unique enough to start a run
+      EXPECT_EQ(decision.decide(paced(match, pace_before, 0.05f)), FrameStatus::NotUnique) << match;
     for (size_t k = 0; k < run.size(); ++k)
-    {
-      Detection d = candidate(run[k], 0.3f);
-      d.best.pace = 3.0f;
-      EXPECT_EQ(decision.decide(d), k + 1 < run.size() ? FrameStatus::Inconsistent : FrameStatus::Published) << k;
-    }
+      EXPECT_EQ(decision.decide(paced(run[k], 3.0f)),
+                k + 1 < run.size() ? FrameStatus::Inconsistent : FrameStatus::Published)
+          << k;
     return decision.joinedBefore();
   };
   // On the run's line (47 - 2.67 k): 45, 42, 39, 36, 33 and 30 (31.0, 1 off); 27 is 1.33 off it, and 1 off the
@@ -264,24 +265,14 @@ TEST(LoopDecision, FramesBeforeARunJoinOnTheLineOfItsPathsPace)
 // (the place server, GP day_left then night_right: night_right 41 as day_left 38).
 TEST(LoopDecision, AHeldFrameJoinsOnThePathsLineWithinRunStartToleranceOnly)
 {
-  Config c = decisionConfig();
-  c.consistent_frames = 5;
-  c.consistency_tolerance = 2;
-  c.max_pace = 3;
-  c.run_start_tolerance = 1;
+  const Config c = reachBackConfig(5, 2);
   LoopDecision decision(c);
-  const auto paced = [](uint64_t match)
-  {
-    Detection d = candidate(match, 0.3f);
-    d.best.pace = 3.0f;
-    return d;
-  };
   for (uint64_t m : {4, 7, 10, 13})
-    EXPECT_EQ(decision.decide(paced(m)), FrameStatus::Inconsistent) << m;
-  EXPECT_EQ(decision.decide(paced(16)), FrameStatus::Published);  // run A, held as published
+    EXPECT_EQ(decision.decide(paced(m, 3.0f)), FrameStatus::Inconsistent) << m;
+  EXPECT_EQ(decision.decide(paced(16, 3.0f)), FrameStatus::Published);  // run A, held as published
   for (uint64_t m : {22, 25, 28, 31})  // 22 is 3 off A's line (19): A breaks, run B begins
-    EXPECT_EQ(decision.decide(paced(m)), FrameStatus::Inconsistent) << m;
-  EXPECT_EQ(decision.decide(paced(33)), FrameStatus::Published);
+    EXPECT_EQ(decision.decide(paced(m, 3.0f)), FrameStatus::Inconsistent) << m;
+  EXPECT_EQ(decision.decide(paced(33, 3.0f)), FrameStatus::Published);
   // B's line: 33 - 2.75 k (A's 16 is 3.25 off it); the path's line at pace 3: 33 - 3 k, A's 16 is 2 off (k = 5):
   // within the held frame's tolerance of 2, not within run_start_tolerance. Only B's own frames join.
   EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 2, 3, 4}));
@@ -700,12 +691,6 @@ TEST(LoopDecision, APublishedRunCatchesUpWhenAFasterPathHoldsForTwoFramesAFewPla
       EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
     for (uint64_t m : {14, 15})
       EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Published);
-  };
-  const auto paced = [](uint64_t match, float pace)
-  {
-    Detection d = candidate(match, 0.3f);
-    d.best.pace = pace;
-    return d;
   };
   LoopDecision decision(c);
   publishRun(decision);
