@@ -178,6 +178,15 @@ def evaluate(first, second, tolerance, config, out, profiles, bin_dir, jobs=2, s
             for m in map(LINE.match, run.stdout.splitlines()) if m]
 
 
+def tool_environment(bin_dir):
+    """The environment the tools in bin_dir run in: the libraries beside them come first. The tools find the core
+    library through the RUNPATH of the workspace they were built in, so a copy of the tools from another build (to
+    compare two builds) would otherwise run that workspace's current library, not its own."""
+    env = dict(os.environ)
+    env['LD_LIBRARY_PATH'] = os.path.abspath(bin_dir) + (':' + env['LD_LIBRARY_PATH'] if env.get('LD_LIBRARY_PATH') else '')
+    return env
+
+
 def run(args, profile):
     out = os.path.join(args.out, re.sub(r'[^A-Za-z0-9.]+', '_', profile))
     os.makedirs(out, exist_ok=True)
@@ -189,10 +198,11 @@ def run(args, profile):
         command += ['--set', assignment]
     if args.camera_info:
         command += ['--camera-info', args.camera_info]
-    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+    env = tool_environment(args.bin)
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, env=env)
     subprocess.run([os.path.join(args.bin, 'openable_eval'), '--published', os.path.join(out, 'run', 'loop_closures.csv'),
                     '--pairs', os.path.join(out, 'pairs.txt'), '--frames', str(frames),
-                    '--output', os.path.join(out, 'eval')], check=True, stdout=subprocess.DEVNULL)
+                    '--output', os.path.join(out, 'eval')], check=True, stdout=subprocess.DEVNULL, env=env)
     with open(os.path.join(out, 'eval', 'metrics.json')) as f:
         metrics = json.load(f)
     # decisions.csv is read only for what was asked: pace_sets.py and pace_sweep.py run thousands of profiles without.
