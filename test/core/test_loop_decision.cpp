@@ -676,6 +676,32 @@ TEST(LoopDecision, TheReachBackPassesOverFeaturelessFrames)
   EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{2, 3}));
 }
 
+TEST(LoopDecision, ACoastedRunPublishesAgainOnlyFromAFrameThatPassesTheGatesItself)
+{
+  // A published run coasts along its line through a featureless stretch (frames 5 to 8). After it, frames 9 and 10
+  // are on the line but below min_uniqueness (0.1), at continue_uniqueness (0.05): a run that had not coasted goes on
+  // through them, one that coasted neither goes on nor resumes (its sequence still holds the stretch and may lag the
+  // revisit); frame 11 passes the gates itself and resumes the run on its line.
+  Config c = reliefConfig();
+  c.continue_uniqueness = 0.05;
+  c.run_resume_frames = 30;
+  const std::vector<float> uniqueness = {0.3f, 0.3f, 0.3f, 0.3f, 0.3f, 0.3f, 0.3f, 0.3f, 0.3f, 0.07f, 0.07f, 0.3f};
+  const auto run = [&](const std::vector<float>& reliefs)
+  {
+    LoopDecision decision(c);
+    std::vector<FrameStatus> statuses;
+    for (size_t i = 0; i < reliefs.size(); ++i)
+      statuses.push_back(decision.decide(withRelief(10 + i, reliefs[i], uniqueness[i])));
+    return statuses;
+  };
+  const auto P = FrameStatus::Published, I = FrameStatus::Inconsistent, F = FrameStatus::Featureless,
+             N = FrameStatus::NotUnique;
+  EXPECT_EQ(run({3, 3, 3, 0.3f, 0.3f, 0.3f, 0.3f, 3, 3, 3, 3, 3}),
+            (std::vector<FrameStatus>{I, I, P, P, P, F, F, F, F, N, N, P}));
+  // Without the stretch the same frames go on with the run at continue_uniqueness.
+  EXPECT_EQ(run({3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3}), (std::vector<FrameStatus>{I, I, P, P, P, P, P, P, P, P, P, P}));
+}
+
 TEST(LoopDecision, APublishedRunCatchesUpWhenAFasterPathHoldsForTwoFramesAFewPlacesAhead)
 {
   // A path of a faster pace takes over from one that lagged the revisit: the match jumps ahead of the run's line, and

@@ -178,7 +178,7 @@ private:
   double runSlope() const;
   /// The last published frame is at most run_resume_frames frames back, its run broke, and this frame's match lies
   /// on its line extended (within consistency_tolerance), as unique as a published run's frame must be
-  /// (continue_uniqueness).
+  /// (continue_uniqueness; after the run coasted, min_uniqueness).
   bool resumesPublishedLine(const Detection& detection, FrameStatus why) const;
   /// The published run's match jumps ahead of its line, by more than consistency_tolerance and at most
   /// kCatchUpPlaces, on a path faster than the line: a path of a faster pace may be taking over from one that lagged
@@ -195,7 +195,8 @@ private:
   /// The run resumes as published, on a line of `slope` places a frame through this frame's match
   /// (resumesPublishedLine: the old line's; followsJump: the new best path's pace).
   FrameStatus resumeRun(const Detection& detection, double slope);
-  /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness.
+  /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness (not after the run
+  /// coasted, until a frame passes the gates itself).
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
 
   DecisionOptions options_;
@@ -242,6 +243,9 @@ private:
   };
   Jump jumped_ahead_;
   size_t frames_since_catch_up_ = SIZE_MAX;  ///< frames decided since the last catch-up (catchingUp)
+  /// The run coasted through featureless frames (coast) and no frame has passed the gates itself since: it neither
+  /// goes on nor resumes at continue_uniqueness.
+  bool coasted_ = false;
 };
 
 }  // namespace openable

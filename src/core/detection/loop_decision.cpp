@@ -91,6 +91,7 @@ void LoopDecision::reset()
   line_ = Line();
   jumped_ahead_ = Jump();
   frames_since_catch_up_ = SIZE_MAX;
+  coasted_ = false;
 }
 
 void LoopDecision::endRun()
@@ -232,7 +233,7 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
   // Nor may the sequence grow worse than the run's last unique frame by more than 5 %: a camera
   // that leaves the route (or a stream that jumps) keeps its old sequence a few frames, matching the end of
   // the route with a rising distance (measured: 0.288 after 0.265 in test_map_sessions' jump).
-  return why == FrameStatus::NotUnique && published_ && detection.uniqueness >= options_.continue_uniqueness &&
+  return why == FrameStatus::NotUnique && published_ && !coasted_ && detection.uniqueness >= options_.continue_uniqueness &&
          detection.best.distance <= kContinueSlack * unique_distance_ && advancesWithRun(detection);
 }
 
@@ -279,7 +280,10 @@ FrameStatus LoopDecision::decideFrame(const Detection& detection, const Geometry
   {
     const bool passes = gatesPass(detection, status) || continuesPublishedRun(detection, status);
     if (passes && status == FrameStatus::Published)  // passed the gates itself, not as a continuation
+    {
       unique_distance_ = detection.best.distance;
+      coasted_ = false;
+    }
     if (resumesPublishedLine(detection, status))
       return resumeRun(detection, line_.slope);
     if (passes)
@@ -312,8 +316,8 @@ bool LoopDecision::resumesPublishedLine(const Detection& detection, FrameStatus 
   // as a published run's frame would (continue_uniqueness, the distance slack) resumes the run.
   if (published_ || !line_.valid || options_.run_resume_frames <= 0)
     return false;
-  const bool unique_enough = why == FrameStatus::Published ||
-                             (why == FrameStatus::NotUnique && detection.uniqueness >= options_.continue_uniqueness);
+  const bool unique_enough = why == FrameStatus::Published || (why == FrameStatus::NotUnique && !coasted_ &&
+                                                               detection.uniqueness >= options_.continue_uniqueness);
   if (!unique_enough || detection.best.distance > kContinueSlack * unique_distance_ || !alongLine(detection))
     return false;
   return std::fabs(static_cast<double>(detection.best.id) - lineExtended()) <= options_.consistency_tolerance;
@@ -390,8 +394,16 @@ FrameStatus LoopDecision::coast(const Detection& detection)
   // stretch of look-alike places is the same run after it (its frames before the stretch may still be reached
   // back to, its line still holds). Nordland's short route through a stretch of 8 such places (frames 300-399 at
   // 2x) kept 16 of its 41 right loops where the run ended there, 37 where it coasts.
+  // But a run that coasted publishes again only from a frame that passes the gates itself (coasted_): after the
+  // stretch its sequence still holds the stretch and may lag the revisit, and frames at continue_uniqueness are then
+  // no evidence it does not (Nordland summer then winter, winter 541-548: two places behind after 20 featureless
+  // frames, published at uniqueness 0.026-0.053 as the run went on or resumed; 5 wrong loops at 1x wherever a change
+  // elsewhere moved them by a thousandth, doc/results.md).
   if (advancesWithRun(detection))  // (never without a run)
+  {
     extendRun(detection, true);
+    coasted_ = true;
+  }
   else
     endRun();
   return FrameStatus::Featureless;
