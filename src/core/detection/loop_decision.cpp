@@ -233,7 +233,8 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
   // Nor may the sequence grow worse than the run's last unique frame by more than 5 %: a camera
   // that leaves the route (or a stream that jumps) keeps its old sequence a few frames, matching the end of
   // the route with a rising distance (measured: 0.288 after 0.265 in test_map_sessions' jump).
-  return why == FrameStatus::NotUnique && published_ && !coasted_ && detection.uniqueness >= options_.continue_uniqueness &&
+  return why == FrameStatus::NotUnique && published_ && !coasted_ &&
+         detection.uniqueness >= options_.continue_uniqueness &&
          detection.best.distance <= kContinueSlack * unique_distance_ && advancesWithRun(detection);
 }
 
