@@ -198,6 +198,9 @@ private:
   /// A frame that failed only the uniqueness gate continues the published run: continue_uniqueness (not after the run
   /// coasted, until a frame passes the gates itself).
   bool continuesPublishedRun(const Detection& detection, FrameStatus why) const;
+  /// A frame that failed only the uniqueness gate is unique enough for a run to go on or resume with it:
+  /// continue_uniqueness, and not after the run coasted until a frame passes the gates itself (coasted_).
+  bool uniqueEnoughToGoOn(const Detection& detection, FrameStatus why) const;
 
   DecisionOptions options_;
   int run_ = 0;                   ///< consecutive frames (ending at the previous one) that passed and agree

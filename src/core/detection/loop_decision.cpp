@@ -233,9 +233,13 @@ bool LoopDecision::continuesPublishedRun(const Detection& detection, FrameStatus
   // Nor may the sequence grow worse than the run's last unique frame by more than 5 %: a camera
   // that leaves the route (or a stream that jumps) keeps its old sequence a few frames, matching the end of
   // the route with a rising distance (measured: 0.288 after 0.265 in test_map_sessions' jump).
-  return why == FrameStatus::NotUnique && published_ && !coasted_ &&
-         detection.uniqueness >= options_.continue_uniqueness &&
+  return published_ && uniqueEnoughToGoOn(detection, why) &&
          detection.best.distance <= kContinueSlack * unique_distance_ && advancesWithRun(detection);
+}
+
+bool LoopDecision::uniqueEnoughToGoOn(const Detection& detection, FrameStatus why) const
+{
+  return why == FrameStatus::NotUnique && !coasted_ && detection.uniqueness >= options_.continue_uniqueness;
 }
 
 FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck& geometry)
@@ -317,8 +321,7 @@ bool LoopDecision::resumesPublishedLine(const Detection& detection, FrameStatus 
   // as a published run's frame would (continue_uniqueness, the distance slack) resumes the run.
   if (published_ || !line_.valid || options_.run_resume_frames <= 0)
     return false;
-  const bool unique_enough = why == FrameStatus::Published || (why == FrameStatus::NotUnique && !coasted_ &&
-                                                               detection.uniqueness >= options_.continue_uniqueness);
+  const bool unique_enough = why == FrameStatus::Published || uniqueEnoughToGoOn(detection, why);
   if (!unique_enough || detection.best.distance > kContinueSlack * unique_distance_ || !alongLine(detection))
     return false;
   return std::fabs(static_cast<double>(detection.best.id) - lineExtended()) <= options_.consistency_tolerance;
