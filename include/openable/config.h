@@ -103,6 +103,10 @@ struct Config
   int min_loop_sequence_length = 21;
   double threshold = -1.0;      ///< accept a loop when the normalised distance is <= threshold; -1 = no gate
   int exclusion_window = 50;    ///< loop-closure mode: the last N frames before the current one are never matched
+  /// Loop-closure mode: while the stream's own map holds at most 2 x exclusion_window + sequence_length frames, its
+  /// own candidates come from a second matcher that leaves out only this many recent frames (a route walked again
+  /// sooner than exclusion_window frames: a corridor, a small room); -1 = off (also when >= exclusion_window).
+  int short_map_exclusion = 30;
   int top_k = 5;                ///< candidates reported per frame
   double min_uniqueness = 0.06; ///< accept only when 1 - best/second best >= this (0 = off)
   int uniqueness_window = 10;   ///< frames around the best match ignored when looking for the second best

@@ -287,6 +287,7 @@ Config Config::paper()
   c.confirm_frames = 0;
   c.run_start_tolerance = -1;
   c.run_resume_frames = 0;
+  c.short_map_exclusion = -1;
   c.min_relief = 0.0;
   c.verified_min_uniqueness = -1.0;
   return c;

@@ -154,6 +154,11 @@ const std::vector<KeyAccess>& table()
               &Config::threshold).range(-1, 1).minusOneIsOff().live(),
       makeKey("exclusion_window", "loop-closure mode: most recent frames never matched (frames)",
               &Config::exclusion_window).range(0, 100000000).live(),
+      makeKey("short_map_exclusion",
+              "loop-closure mode: while the stream's own map holds at most 2 x exclusion_window + sequence_length "
+              "frames, its own candidates come from a second matcher leaving out only this many recent frames "
+              "(-1 = off; off also at exclusion_window or more)",
+              &Config::short_map_exclusion).range(-1, 100000000).minusOneIsOff(),
       makeKey("top_k", "candidates reported per frame", &Config::top_k).range(1, 1000).live(),
       makeKey("min_uniqueness", "accept only when 1 - best / second best >= this (0 = off)", &Config::min_uniqueness).range(0, 1).live(),
       makeKey("uniqueness_window", "frames around the best match skipped when finding the second best (frames)",

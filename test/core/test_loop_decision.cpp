@@ -720,18 +720,18 @@ TEST(LoopDecision, APublishedRunCatchesUpWhenAFasterPathHoldsForTwoFramesAFewPla
   };
   LoopDecision decision(c);
   publishRun(decision);
-  EXPECT_FALSE(decision.catchingUp());
+  EXPECT_FALSE(decision.keepsSearching());
   EXPECT_EQ(decision.decide(paced(19, 1.5f)), FrameStatus::Inconsistent);  // the line says 16: 3 ahead
-  EXPECT_FALSE(decision.catchingUp());
+  EXPECT_FALSE(decision.keepsSearching());
   EXPECT_EQ(decision.decide(paced(21, 1.5f)), FrameStatus::Published);  // on the faster path's line (19 + 1.5)
-  EXPECT_TRUE(decision.catchingUp());                                   // the matcher goes on searching
+  EXPECT_TRUE(decision.keepsSearching());                                   // the matcher goes on searching
   for (uint64_t m : {22, 24, 25, 27})
   {
     EXPECT_EQ(decision.decide(paced(m, 1.5f)), FrameStatus::Published) << m;
-    EXPECT_TRUE(decision.catchingUp()) << m;
+    EXPECT_TRUE(decision.keepsSearching()) << m;
   }
   EXPECT_EQ(decision.decide(paced(28, 1.5f)), FrameStatus::Published);
-  EXPECT_FALSE(decision.catchingUp());  // consistent_frames frames after it
+  EXPECT_FALSE(decision.keepsSearching());  // consistent_frames frames after it
 
   const auto jumpThen = [&](uint64_t jump, float jump_pace, uint64_t next, float next_pace)
   {
@@ -739,7 +739,7 @@ TEST(LoopDecision, APublishedRunCatchesUpWhenAFasterPathHoldsForTwoFramesAFewPla
     publishRun(d);
     EXPECT_NE(d.decide(paced(jump, jump_pace)), FrameStatus::Published) << jump;
     const FrameStatus after = d.decide(paced(next, next_pace));
-    EXPECT_FALSE(d.catchingUp()) << jump << " then " << next;
+    EXPECT_FALSE(d.keepsSearching()) << jump << " then " << next;
     return after;
   };
   // One frame on a faster path, then back on the run's line: the run resumes on the line it had.
@@ -753,5 +753,66 @@ TEST(LoopDecision, APublishedRunCatchesUpWhenAFasterPathHoldsForTwoFramesAFewPla
   publishRun(one_pace);
   EXPECT_NE(one_pace.decide(paced(19, 1.0f)), FrameStatus::Published);
   EXPECT_NE(one_pace.decide(paced(20, 1.0f)), FrameStatus::Published);
-  EXPECT_FALSE(one_pace.catchingUp());
+  EXPECT_FALSE(one_pace.keepsSearching());
+}
+
+// A short map's first place starts no run (Detection::best_at_session_start): a path ending there has no past, and a
+// short route's end "matches" its start.
+TEST(LoopDecision, AShortMapsFirstPlaceStartsNoRun)
+{
+  const auto atStart = [](uint64_t match)
+  {
+    Detection d = candidate(match, 0.3f);
+    d.short_map = true;
+    d.best_at_session_start = match == 0;
+    return d;
+  };
+  LoopDecision decision(decisionConfig());  // consistent_frames 3
+  EXPECT_EQ(decision.decide(atStart(0)), FrameStatus::Excluded);
+  EXPECT_EQ(decision.decide(atStart(0)), FrameStatus::Excluded);
+  EXPECT_EQ(decision.decide(atStart(1)), FrameStatus::Inconsistent);  // the next place starts the run
+  EXPECT_EQ(decision.decide(atStart(2)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(atStart(3)), FrameStatus::Published);
+
+  // Unflagged (a long map: its first place is as old as any), place 0 starts a run as any other.
+  LoopDecision long_map(decisionConfig());
+  EXPECT_EQ(long_map.decide(candidate(0, 0.3f)), FrameStatus::Inconsistent);
+}
+
+// A short map's run first published with no published line before it keeps the matcher searching (its pace prior on)
+// for consistent_frames frames: a revisit's first frames fit any pace. A run on a long map, or one that restarts within
+// run_resume_frames of a published line, follows its path's pace at once.
+TEST(LoopDecision, AShortMapsFirstRunKeepsTheMatcherSearchingForConsistentFrames)
+{
+  Config c = decisionConfig();  // consistent_frames 3
+  c.run_resume_frames = 30;
+  const auto shortMap = [](uint64_t match, float uniqueness = 0.3f)
+  {
+    Detection d = candidate(match, uniqueness);
+    d.short_map = true;
+    return d;
+  };
+  LoopDecision decision(c);
+  for (uint64_t m : {10, 11})
+    EXPECT_EQ(decision.decide(shortMap(m)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(shortMap(12)), FrameStatus::Published);
+  EXPECT_TRUE(decision.keepsSearching());
+  EXPECT_EQ(decision.decide(shortMap(13)), FrameStatus::Published);
+  EXPECT_TRUE(decision.keepsSearching());
+  EXPECT_EQ(decision.decide(shortMap(14)), FrameStatus::Published);
+  EXPECT_TRUE(decision.keepsSearching());
+  EXPECT_EQ(decision.decide(shortMap(15)), FrameStatus::Published);
+  EXPECT_FALSE(decision.keepsSearching());  // consistent_frames frames after the run's first published one
+
+  // The run breaks and starts again within run_resume_frames of its line: no fresh start.
+  EXPECT_EQ(decision.decide(shortMap(40, 0.0f)), FrameStatus::NotUnique);
+  for (uint64_t m : {41, 42})
+    EXPECT_EQ(decision.decide(shortMap(m)), FrameStatus::Inconsistent);
+  EXPECT_EQ(decision.decide(shortMap(43)), FrameStatus::Published);
+  EXPECT_FALSE(decision.keepsSearching());
+
+  LoopDecision long_map(c);
+  for (uint64_t m : {10, 11, 12})
+    long_map.decide(candidate(m, 0.3f));
+  EXPECT_FALSE(long_map.keepsSearching());
 }

@@ -89,6 +89,92 @@ TEST(LoopDetector, LoopSequencesAreCandidatesFromMinLoopSequenceLengthFrames)
     }
 }
 
+// short_map_exclusion: while the stream's own map holds at most 2 x exclusion_window + L frames, a second matcher
+// leaves out only its last short_map_exclusion frames, so a route of 15 places walked again at once (sooner than
+// exclusion_window 20) is found. Once the map is longer, every detection is exactly the one of the detector without
+// the short window: the session's own matcher went on behind it as if it were not there.
+TEST(LoopDetector, AShortMapIsComparedBeyondItsShortWindowAndALongerMapAsWithoutIt)
+{
+  std::mt19937_64 rng(33);
+  std::vector<FrameDescriptor> frames;
+  for (int i = 0; i < 120; ++i)
+  {
+    const int revisits = i >= 15 && i < 30 ? i - 15 : (i >= 80 && i < 100 ? i - 40 : -1);
+    frames.push_back(revisits >= 0 ? frames[revisits] : openable_test::randomWords(rng, 22));
+    if (revisits >= 0)
+      frames.back()[0] ^= rng() & 0xFF;  // a few bits of noise: nearly the same place
+  }
+  Config off = Config::paper();
+  off.sequence_length = 5;
+  off.exclusion_window = 20;
+  off.threshold = 0.2;
+  ASSERT_EQ(off.short_map_exclusion, -1);
+  Config on = off;
+  on.short_map_exclusion = 8;  // short while the map holds at most 2 x 20 + 5 = 45 frames
+  LoopDetector with(on), without(off);
+  for (int i = 0; i < 120; ++i)
+  {
+    const Detection a = with.process(frames[i]), b = without.process(frames[i]);
+    if (i >= 5 && i < 40)
+      EXPECT_TRUE(a.short_map) << i;
+    if (i > 50)
+      EXPECT_FALSE(a.short_map) << i;
+    EXPECT_FALSE(b.short_map) << i;
+    if (i >= 19 && i < 30)  // full sequences of the revisit, 15 to 4 frames after its place
+    {
+      EXPECT_TRUE(openable_test::passesAcceptanceGate(on, a)) << i;
+      EXPECT_EQ(a.best.id, uint64_t(i - 15)) << i;
+      EXPECT_FALSE(openable_test::passesAcceptanceGate(off, b)) << i;  // its place is inside the window
+    }
+    if (i >= 84 && i < 100)
+      EXPECT_EQ(a.best.id, uint64_t(i - 40)) << i;
+    if (i > 50)
+    {
+      EXPECT_EQ(a.has_candidates, b.has_candidates) << i;
+      EXPECT_EQ(a.candidates, b.candidates) << i;
+      EXPECT_EQ(a.best.id, b.best.id) << i;
+      EXPECT_EQ(a.best.distance, b.best.distance) << i;
+      EXPECT_EQ(a.uniqueness, b.uniqueness) << i;
+      EXPECT_EQ(a.exclusion_edge_id, b.exclusion_edge_id) << i;
+    }
+    if (a.short_map && b.has_exclusion_edge && a.has_exclusion_edge)
+      EXPECT_EQ(a.exclusion_edge_id, b.exclusion_edge_id + 12) << i;  // the short window's edge, 20 - 8 newer
+  }
+}
+
+// A short map says when its best match is the session's first place (Detection::best_at_session_start): a
+// partial sequence ending there has no past (LoopDecision starts no run from it).
+TEST(LoopDetector, AShortMapSaysWhenItsBestMatchIsTheSessionsFirstPlace)
+{
+  std::mt19937_64 rng(34);
+  std::vector<FrameDescriptor> frames;
+  for (int i = 0; i < 15; ++i)
+    frames.push_back(openable_test::randomWords(rng, 22));
+  for (int i = 0; i < 2; ++i)
+  {
+    frames.push_back(frames[i]);
+    frames.back()[0] ^= rng() & 0xFF;
+  }
+  Config c = Config::paper();
+  c.sequence_length = 5;
+  c.exclusion_window = 20;
+  c.short_map_exclusion = 8;
+  c.min_loop_sequence_length = 1;
+  LoopDetector detector(c);
+  for (int i = 0; i < 15; ++i)
+  {
+    const Detection d = detector.process(frames[i]);  // (the first frames compared have place 0 nearly alone)
+    EXPECT_EQ(d.best_at_session_start, d.has_candidates && d.best.id == 0) << i;
+  }
+  const Detection first = detector.process(frames[15]);
+  EXPECT_TRUE(first.short_map);
+  EXPECT_EQ(first.best.id, 0u);
+  EXPECT_TRUE(first.best_at_session_start);
+  const Detection second = detector.process(frames[16]);
+  EXPECT_EQ(second.best.id, 1u);
+  EXPECT_FALSE(second.best_at_session_start);
+}
+
 TEST(LoopDetector, TopKAreDistinctPlacesBestFirst)
 {
   Config c = Config::paper();

@@ -22,7 +22,8 @@ enum class FrameStatus
   TimeJump,            ///< not stored: its stamp is earlier than the previous frame's
   TooEarly,            ///< fewer than min_candidates places with a long enough sequence to compare with
   Excluded,            ///< history exists, but every frame of it is inside the exclusion (frames or seconds), or
-                       ///< the best match is the exclusion's edge (the newest place compared) and starts no run
+                       ///< the best match is the exclusion's edge (the newest place compared) or a short map's first
+                       ///< place, and starts no run
   AboveThreshold,      ///< best normalised distance > threshold
   NotUnique,           ///< uniqueness (1 - best / second best) < min_uniqueness, or no gate is set at all
   Inconsistent,        ///< fewer than consistent_frames consecutive frames agree on where the loop is
@@ -135,11 +136,14 @@ public:
   void setOptions(const DecisionOptions& options);
   /// Forgets the consistency run and the frames decided so far (a new stream, or a gap in it).
   void reset();
-  /// A published run caught up within the last consistent_frames frames (followsJump): the matcher should go on
-  /// searching (its pace prior on) as it would while a broken run became consistent again.
-  bool catchingUp() const
+  /// The matcher should go on searching (its pace prior on) although the last frame was published, as it would
+  /// while a broken run became consistent again: for consistent_frames frames after a published run caught up
+  /// (followsJump), or after a short map's run was first published with no published line before it (a revisit
+  /// begins: its first frames fit any pace, and off at once the prior let a slower path take the run).
+  bool keepsSearching() const
   {
-    return frames_since_catch_up_ < static_cast<size_t>(std::max(0, options_.consistent_frames));
+    const size_t frames = static_cast<size_t>(std::max(0, options_.consistent_frames));
+    return frames_since_catch_up_ < frames || frames_since_fresh_start_ < frames;
   }
   /// The most places a published run's match may jump ahead of its line and the run goes on (catchesUp).
   static constexpr double kCatchUpPlaces = 5.0;
@@ -152,6 +156,8 @@ private:
   bool featureless() const;
   /// The best match is the newest place compared: the exclusion window's edge.
   bool pressedAgainstExclusion(const Detection& detection) const;
+  /// The best match may start no run: the exclusion's edge, or a short map's first place.
+  bool startsNoRun(const Detection& detection) const;
   /// The distance gate is set and the best match fails it.
   bool aboveThreshold(const Detection& detection) const;
   /// Geometry may stand in for the rule the frame failed, `why`: the uniqueness gate or the minimum of places.
@@ -245,7 +251,8 @@ private:
     size_t frames_since = SIZE_MAX;  ///< frames decided after it
   };
   Jump jumped_ahead_;
-  size_t frames_since_catch_up_ = SIZE_MAX;  ///< frames decided since the last catch-up (catchingUp)
+  size_t frames_since_catch_up_ = SIZE_MAX;  ///< frames decided since the last catch-up (keepsSearching)
+  size_t frames_since_fresh_start_ = SIZE_MAX;  ///< ... since a short map's run was first published (keepsSearching)
   /// The run coasted through featureless frames (coast) and no frame has passed the gates itself since: it neither
   /// goes on nor resumes at continue_uniqueness.
   bool coasted_ = false;

@@ -53,6 +53,13 @@ struct Detection
   bool has_exclusion_edge = false;
   uint32_t exclusion_edge_session = 0;
   uint64_t exclusion_edge_id = 0;
+  /// The query's own session was matched with the short map's window (MatchOptions::short_map_exclusion): its
+  /// candidates and the exclusion's edge above are the second matcher's.
+  bool short_map = false;
+  /// With the short map's window: the best match is the own session's first place, forwards. A sequence ending
+  /// there has no past and its cost is the row's typical one plus a few frames: the end of a short route "matches"
+  /// its start (LoopDecision starts no run from it).
+  bool best_at_session_start = false;
 };
 
 /// Detection::excluded: no candidate, the query's own past is stored but all of it inside the exclusion
@@ -70,6 +77,13 @@ bool onlyExcludedPast(const Detection& detection, size_t other_frames);
 /// a stream were the main source of false loops (measured, doc/results.md), while waiting for all L frames
 /// left a short route (60 places) without a loop. Localisation accepts min_sequence_length terms, because
 /// there every query has a true match.
+///
+/// A short map: while the own session holds at most 2 x exclusion_window + sequence_length frames, a second matcher
+/// of that session leaves out only its last short_map_exclusion frames and answers for the session's candidates, so
+/// a route walked again within exclusion_window frames (a corridor, a small room) is compared at all. The session's
+/// own matcher goes on matching behind it as without it: what a long stream decides once its map has grown does not
+/// depend on the short window (one matcher serving both windows moved GP day_left then night_right 1x 0.750 ->
+/// 0.290, doc/results.md).
 /// What MapMatcher reads of a Config (the keys of the same names): sequences, paces, the exclusion, top-k.
 struct MatchOptions
 {
@@ -84,6 +98,7 @@ struct MatchOptions
   double slip_penalty;       ///< a fraction of pace_penalty (PaceMatcher)
   double pace_prior;         ///< a fraction of pace_penalty (PaceMatcher), while searching
   int exclusion_window;      ///< own-session frames too recent to be candidates
+  int short_map_exclusion;   ///< the same while the own map is short (-1 or >= exclusion_window: off)
   double exclusion_seconds;  ///< the same in seconds of stamp
   int top_k;
   int uniqueness_window;
@@ -124,7 +139,12 @@ public:
 private:
   /// The own-session exclusion, here only: the positions [0, result) of `frames` a query stamped `stamp`
   /// may be compared with (all of them when the session is not the query's own).
-  size_t candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const;
+  size_t candidateColumns(const PlaceDatabase& frames, bool own, double stamp, int excluded_frames) const;
+  /// Whether the own session's `frames` are a short map (the short window is on and they hold at most
+  /// 2 x exclusion_window + sequence_length frames); makes the short map's matcher when they are, drops it when not.
+  bool shortMap(const PlaceDatabase& frames);
+  /// The matcher whose answers stand for `session` in the last match: the short map's for the own session then.
+  const RowMatcher& matcherOf(uint32_t session) const;
   /// The candidate in `column` of `session`'s matcher.
   Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;
   int minTerms() const;
@@ -141,6 +161,10 @@ private:
   std::unique_ptr<RowMatcher> makeMatcher(const DescriptorLayout& layout) const;
 
   std::vector<std::unique_ptr<RowMatcher>> matchers_;  ///< one per session of the map, in map order
+  std::unique_ptr<RowMatcher> short_matcher_;  ///< the own session's, with the short map's window (null: none)
+  bool short_answers_ = false;   ///< the last match took the own session's candidates from short_matcher_
+  uint32_t own_session_ = 0;     ///< the own session of the last match (with short_answers_)
+  bool searching_ = true;        ///< setSearching's last value, for a matcher made later
   FrameDescriptor last_query_;
   FrameDescriptor last_shifted_;  ///< the last query's shifted views (left, right), empty without
   /// One session's candidate column and its distance.

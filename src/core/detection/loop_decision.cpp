@@ -91,6 +91,7 @@ void LoopDecision::reset()
   line_ = Line();
   jumped_ahead_ = Jump();
   frames_since_catch_up_ = SIZE_MAX;
+  frames_since_fresh_start_ = SIZE_MAX;
   coasted_ = false;
 }
 
@@ -142,6 +143,14 @@ bool LoopDecision::pressedAgainstExclusion(const Detection& detection) const
   // keeps its 23 right loops, 17 of them within 2 places of the edge).
   return detection.has_exclusion_edge && detection.best.session == detection.exclusion_edge_session &&
          detection.best.id >= detection.exclusion_edge_id;
+}
+
+bool LoopDecision::startsNoRun(const Detection& detection) const
+{
+  // A short map's first place: a path ending there has no past, its cost is the row's typical one plus a few
+  // frames, and a short route's end matches its start (GP day_left then day_right 0-59: the first pass's frames 58
+  // and 59 at place 0, uniqueness 0.002 and 0.010, joined the revisit's first run: 2 wrong loops).
+  return pressedAgainstExclusion(detection) || detection.best_at_session_start;
 }
 
 bool LoopDecision::gatesPass(const Detection& detection, FrameStatus& why) const
@@ -247,6 +256,8 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
   joined_before_.clear();
   if (frames_since_catch_up_ != SIZE_MAX)
     ++frames_since_catch_up_;
+  if (frames_since_fresh_start_ != SIZE_MAX)
+    ++frames_since_fresh_start_;
   if (jumped_ahead_.frames_since != SIZE_MAX)
     ++jumped_ahead_.frames_since;
   if (detection.has_candidates && std::isfinite(detection.relief))
@@ -277,7 +288,7 @@ FrameStatus LoopDecision::decideFrame(const Detection& detection, const Geometry
     status = detection.excluded ? FrameStatus::Excluded : FrameStatus::TooEarly;
   else if (detection.candidates < static_cast<size_t>(options_.min_candidates))
     status = FrameStatus::TooEarly;
-  else if (!published_ && pressedAgainstExclusion(detection))
+  else if (!published_ && startsNoRun(detection))
     status = FrameStatus::Excluded;
   else if (featureless())
     return coast(detection);
@@ -450,7 +461,15 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
     return resumeRun(detection, detection.best.pace * detection.best.direction);
   }
   if (published_ && !was_published)
+  {
     joined_before_ = framesOnLineBefore(detection.best.pace * detection.best.direction);
+    // A revisit of a short route begins: within exclusion_window frames of the first pass its first frames fit any
+    // pace, and the pace prior, off at once, let a slower path take the run 2 to 4 places behind (GP day_left then
+    // day_right 0-59, revisit frames 70-79, 10 wrong loops at a window of 30, doc/results.md). A long map's revisit
+    // has had its first frames too_early or excluded while the path settled.
+    if (detection.short_map && !line_.valid)
+      frames_since_fresh_start_ = 0;
+  }
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
 }
 

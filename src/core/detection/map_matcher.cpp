@@ -28,6 +28,7 @@ MatchOptions MatchOptions::from(const Config& config)
   o.pace_prior = config.pace_prior;
   o.screen_places = config.screen_places;
   o.exclusion_window = config.exclusion_window;
+  o.short_map_exclusion = config.short_map_exclusion;
   o.exclusion_seconds = config.exclusion_seconds;
   o.top_k = config.top_k;
   o.uniqueness_window = config.uniqueness_window;
@@ -64,11 +65,11 @@ int MapMatcher::minTerms() const
   return least == 0 ? options_.sequence_length : std::min(least, options_.sequence_length);
 }
 
-size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp) const
+size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp, int excluded_frames) const
 {
   if (!own)
     return frames.size();
-  const size_t excluded = static_cast<size_t>(options_.exclusion_window);
+  const size_t excluded = static_cast<size_t>(std::max(0, excluded_frames));
   size_t columns = frames.size() > excluded ? frames.size() - excluded : 0;
   if (options_.exclusion_seconds > 0.0 && stamp > 0.0)
   {
@@ -89,9 +90,30 @@ size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, doubl
   return columns;
 }
 
+bool MapMatcher::shortMap(const PlaceDatabase& frames)
+{
+  const int64_t most = 2 * int64_t(options_.exclusion_window) + options_.sequence_length;
+  const bool is_short = options_.short_map_exclusion >= 0 &&
+                        options_.short_map_exclusion < options_.exclusion_window &&
+                        static_cast<int64_t>(frames.size()) <= most;
+  if (!is_short)
+    short_matcher_.reset();
+  else if (!short_matcher_)
+  {
+    short_matcher_ = makeMatcher(metric_.layout());
+    short_matcher_->setSearching(searching_);
+  }
+  return is_short;
+}
+
+const RowMatcher& MapMatcher::matcherOf(uint32_t session) const
+{
+  return short_answers_ && session == own_session_ ? *short_matcher_ : *matchers_[session];
+}
+
 Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_t column) const
 {
-  const RowMatcher& matcher = *matchers_[session];
+  const RowMatcher& matcher = matcherOf(session);
   const PlaceDatabase& frames = map.frames(session);
   Candidate c;
   int direction = 1;
@@ -150,11 +172,23 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   const size_t window = static_cast<size_t>(std::max(0, options_.uniqueness_window));
   std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
   picks.clear();
+  short_answers_ = false;
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
   {
     const bool own = static_cast<int>(s) == own_session;
     const PlaceDatabase& frames = map.frames(s);
-    const size_t columns = candidateColumns(frames, own, stamp);
+    size_t columns = candidateColumns(frames, own, stamp, options_.exclusion_window);
+    RowMatcher* matcher = matchers_[s].get();
+    if (own && shortMap(frames))
+    {
+      // The session's own matcher goes on as without the short window (its state is what a longer map builds on);
+      // the short map's matcher answers for the session.
+      matcher->matchShifted(query.data(), shifted.data(), shifted.size() / words, frames, columns);
+      columns = candidateColumns(frames, own, stamp, options_.short_map_exclusion);
+      matcher = short_matcher_.get();
+      short_answers_ = detection.short_map = true;
+      own_session_ = s;
+    }
     detection.own_excluded = detection.own_excluded || (own && columns == 0 && !frames.empty());
     if (own && columns > 0 && columns < frames.size())
     {
@@ -162,11 +196,10 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
       detection.exclusion_edge_session = s;
       detection.exclusion_edge_id = frames.firstId() + columns - 1;
     }
-    RowMatcher& matcher = *matchers_[s];
-    matcher.matchShifted(query.data(), shifted.data(), shifted.size() / words, frames, columns);
-    detection.candidates += matcher.smallestDistinct(wanted, window, minTerms(), taken_);
+    matcher->matchShifted(query.data(), shifted.data(), shifted.size() / words, frames, columns);
+    detection.candidates += matcher->smallestDistinct(wanted, window, minTerms(), taken_);
     for (size_t column : taken_)
-      picks.push_back({matcher.normalized(column, nullptr, minTerms()), s, column});
+      picks.push_back({matcher->normalized(column, nullptr, minTerms()), s, column});
   }
   // By distance; ties to the earlier session, then the lower column (as one scan would).
   std::stable_sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance < b.distance; });
@@ -177,7 +210,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     // Each path's end placed between the paces followed (its distance and pace stay the path's): each candidate is
     // its own session's, so place servers that split the sessions report what one server would.
     Candidate c = candidateAt(map, picks[i].session, picks[i].column);
-    const size_t refined = matchers_[picks[i].session]->refinedColumn(picks[i].column);
+    const size_t refined = matcherOf(picks[i].session).refinedColumn(picks[i].column);
     if (refined != picks[i].column)
     {
       const Candidate path = c;
@@ -200,6 +233,8 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     detection.uniqueness = matchUniqueness(detection.best.distance,
                                            picks.size() < 2 ? std::nullopt : std::optional<float>(picks[1].distance));
     detection.relief = reliefAround(map, detection.best);
+    detection.best_at_session_start = detection.short_map && detection.best.session == own_session_ &&
+                                      detection.best.position == 0 && detection.best.direction == 1;
   }
   return detection;
 }
@@ -210,7 +245,7 @@ float MapMatcher::reliefAround(const SessionMap& map, const Candidate& best) con
   // to the pass over the row): a sequence localises by how these differ, and where they do not (Nordland's
   // snowfields, every place within 10 of the match as far from the query as its match), a path drifts along
   // the stretch unnoticed: all of the 12 wrong loops of Nordland summer then winter at 1x (doc/results.md).
-  const RowMatcher& matcher = *matchers_[best.session];
+  const RowMatcher& matcher = matcherOf(best.session);
   const float spread = matcher.rowSpread();
   if (!std::isfinite(spread))
     return std::nanf("");
@@ -241,7 +276,7 @@ void MapMatcher::lastRow(const SessionMap& map, std::vector<float>& out) const
     out.resize(start + frames.size(), std::nanf(""));
     if (s >= matchers_.size())
       continue;
-    const RowMatcher& matcher = *matchers_[s];
+    const RowMatcher& matcher = matcherOf(s);
     for (size_t c = 0; c < matcher.columns(); ++c)
     {
       const uint64_t id = matcher.firstId() + c;
@@ -261,12 +296,21 @@ void MapMatcher::setOptions(const MatchOptions& options)
                         options.pace_tolerance != options_.pace_tolerance ||
                         options.slip_penalty != options_.slip_penalty || options.pace_prior != options_.pace_prior ||
                         options.screen_places != options_.screen_places;
+  if (new_kind || options.short_map_exclusion != options_.short_map_exclusion)
+    short_matcher_.reset();  // the next short map's frame makes it afresh
   if (new_kind)
   {
     options_ = options;
     for (auto& matcher : matchers_)
       matcher = makeMatcher(metric_.layout());
     return;
+  }
+  if (short_matcher_)
+  {
+    if (options.sequence_length != options_.sequence_length)
+      short_matcher_->setSequenceLength(options.sequence_length);
+    if (options.bidirectional != options_.bidirectional)
+      short_matcher_->setBidirectional(options.bidirectional);
   }
   for (auto& matcher : matchers_)
   {
@@ -280,14 +324,19 @@ void MapMatcher::setOptions(const MatchOptions& options)
 
 void MapMatcher::setSearching(bool searching)
 {
+  searching_ = searching;
   for (auto& matcher : matchers_)
     matcher->setSearching(searching);
+  if (short_matcher_)
+    short_matcher_->setSearching(searching);
 }
 
 void MapMatcher::reset()
 {
   for (auto& matcher : matchers_)
     matcher->reset();
+  if (short_matcher_)
+    short_matcher_->reset();
 }
 
 }  // namespace openable

@@ -26,7 +26,7 @@ std::vector<MapLoop> replayLoops(const SessionMap& map, const Config& config)
       outcome.frame = p;
       outcome.detection = detector.process(query, frames.info(p));
       outcome.status = decision.decide(outcome.detection);
-      detector.setSearching(outcome.status != FrameStatus::Published || decision.catchingUp());
+      detector.setSearching(outcome.status != FrameStatus::Published || decision.keepsSearching());
       outcome.score = decision.score(outcome.detection);
       std::vector<FrameOutcome> published =
           confirmation.stored(outcome, decision.joinedBefore(), decision.mayJoinLater(), decision.ownFramesBefore());

@@ -443,7 +443,7 @@ std::vector<FrameOutcome> OnlineDetector::decideAndConfirm(Channel channel, cons
   outcome.score = decision.score(outcome.detection);
   // The matcher follows the decision's run (what verification does with it comes after): a stream whose loops are
   // only flagged unverified matches as one whose loops are published.
-  channel.detector.setSearching(outcome.status != FrameStatus::Published || decision.catchingUp());
+  channel.detector.setSearching(outcome.status != FrameStatus::Published || decision.keepsSearching());
   // A run's first frames (Inconsistent) may join its loop closure later (run_start_tolerance): they are checked
   // as a published frame is, and one that verification rejects breaks the chain of frames that may join.
   const bool run_start = outcome.status == FrameStatus::Inconsistent && decision.mayJoinLater();
