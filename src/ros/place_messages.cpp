@@ -53,6 +53,8 @@ PlaceCandidatesPtr toMsg(const std_msgs::Header& header, const openable::ServerC
   msg->own_excluded = a.own_excluded;
   msg->has_own_edge = a.has_own_edge;
   msg->own_edge_id = a.own_edge_id;
+  msg->own_short_map = a.own_short_map;
+  msg->own_first_id = a.own_first_id;
   msg->other_frames = uint32_t(a.other_frames);
   for (const openable::ServerCandidate& c : a.top)
   {
@@ -87,6 +89,8 @@ openable::ServerCandidates fromMsg(const PlaceCandidates& msg)
   a.own_excluded = msg.own_excluded;
   a.has_own_edge = msg.has_own_edge;
   a.own_edge_id = msg.own_edge_id;
+  a.own_short_map = msg.own_short_map;
+  a.own_first_id = msg.own_first_id;
   a.other_frames = msg.other_frames;
   for (const PlaceCandidate& m : msg.top)
   {

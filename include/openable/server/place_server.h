@@ -80,6 +80,10 @@ struct ServerCandidates
   /// there starts no run, LoopDecision).
   bool has_own_edge = false;
   uint64_t own_edge_id = 0;
+  /// The query's own past here was matched with the short map's window (Detection::short_map); own_first_id is its
+  /// first place (a match there starts no run, Detection::best_at_session_start).
+  bool own_short_map = false;
+  uint64_t own_first_id = 0;
   size_t other_frames = 0;    ///< frames held here in sessions other than the query's
 };
 

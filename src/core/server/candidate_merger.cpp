@@ -45,6 +45,7 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
 
   std::vector<ServerCandidate> all;
   size_t other_frames = 0;
+  uint64_t own_first_id = 0;
   Detection& d = out.detection;
   for (const ServerCandidates& a : answers)
   {
@@ -56,6 +57,11 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
       d.has_exclusion_edge = true;
       d.exclusion_edge_session = sessionIndex(out.query_session);
       d.exclusion_edge_id = a.own_edge_id;
+    }
+    if (a.own_short_map)
+    {
+      d.short_map = true;
+      own_first_id = a.own_first_id;
     }
     other_frames += a.other_frames;
     if (a.stored)
@@ -90,6 +96,8 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
     d.best = d.top.front();
     d.uniqueness =
         matchUniqueness(d.best.distance, all.size() < 2 ? std::nullopt : std::optional<float>(all[1].distance));
+    d.best_at_session_start = d.short_map && d.best.session == sessionIndex(out.query_session) &&
+                              d.best.id == own_first_id && d.best.direction == 1;
   }
 
   auto found = streams_.find(out.query_session);

@@ -190,6 +190,8 @@ ServerCandidates PlaceServer::process(const PlaceDescriptorInput& input)
     out.own_excluded = detection.own_excluded;  // MapMatcher's exclusion: frames exist, none outside it
     out.has_own_edge = detection.has_exclusion_edge;
     out.own_edge_id = detection.exclusion_edge_id;
+    out.own_short_map = detection.short_map;
+    out.own_first_id = frames.firstId();
     out.other_frames -= frames.size();
   }
   if (owned)
