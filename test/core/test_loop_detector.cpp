@@ -173,6 +173,15 @@ TEST(LoopDetector, AShortMapSaysWhenItsBestMatchIsTheSessionsFirstPlace)
   const Detection second = detector.process(frames[16]);
   EXPECT_EQ(second.best.id, 1u);
   EXPECT_FALSE(second.best_at_session_start);
+  // A live change of the matcher's kind drops the short map's matcher with the others': the last row is unknown.
+  Config live = c;
+  live.max_pace = 3;
+  detector.updateMatching(live);
+  std::vector<float> row;
+  detector.lastRow(row);
+  ASSERT_EQ(row.size(), 17u);
+  EXPECT_TRUE(std::all_of(row.begin(), row.end(), [](float d) { return std::isnan(d); }));
+  EXPECT_TRUE(detector.process(frames[2]).short_map);
 }
 
 TEST(LoopDetector, TopKAreDistinctPlacesBestFirst)

@@ -297,7 +297,10 @@ void MapMatcher::setOptions(const MatchOptions& options)
                         options.slip_penalty != options_.slip_penalty || options.pace_prior != options_.pace_prior ||
                         options.screen_places != options_.screen_places;
   if (new_kind || options.short_map_exclusion != options_.short_map_exclusion)
+  {
     short_matcher_.reset();  // the next short map's frame makes it afresh
+    short_answers_ = false;
+  }
   if (new_kind)
   {
     options_ = options;
