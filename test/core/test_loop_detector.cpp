@@ -116,9 +116,13 @@ TEST(LoopDetector, AShortMapIsComparedBeyondItsShortWindowAndALongerMapAsWithout
   {
     const Detection a = with.process(frames[i]), b = without.process(frames[i]);
     if (i >= 5 && i < 40)
+    {
       EXPECT_TRUE(a.short_map) << i;
+    }
     if (i > 50)
+    {
       EXPECT_FALSE(a.short_map) << i;
+    }
     EXPECT_FALSE(b.short_map) << i;
     if (i >= 19 && i < 30)  // full sequences of the revisit, 15 to 4 frames after its place
     {
@@ -127,7 +131,9 @@ TEST(LoopDetector, AShortMapIsComparedBeyondItsShortWindowAndALongerMapAsWithout
       EXPECT_FALSE(openable_test::passesAcceptanceGate(off, b)) << i;  // its place is inside the window
     }
     if (i >= 84 && i < 100)
+    {
       EXPECT_EQ(a.best.id, uint64_t(i - 40)) << i;
+    }
     if (i > 50)
     {
       EXPECT_EQ(a.has_candidates, b.has_candidates) << i;
@@ -138,7 +144,9 @@ TEST(LoopDetector, AShortMapIsComparedBeyondItsShortWindowAndALongerMapAsWithout
       EXPECT_EQ(a.exclusion_edge_id, b.exclusion_edge_id) << i;
     }
     if (a.short_map && b.has_exclusion_edge && a.has_exclusion_edge)
+    {
       EXPECT_EQ(a.exclusion_edge_id, b.exclusion_edge_id + 12) << i;  // the short window's edge, 20 - 8 newer
+    }
   }
 }
 

@@ -140,9 +140,9 @@ private:
   /// The own-session exclusion, here only: the positions [0, result) of `frames` a query stamped `stamp`
   /// may be compared with (all of them when the session is not the query's own).
   size_t candidateColumns(const PlaceDatabase& frames, bool own, double stamp, int excluded_frames) const;
-  /// Whether the own session's `frames` are a short map (the short window is on and they hold at most
-  /// 2 x exclusion_window + sequence_length frames); makes the short map's matcher when they are, drops it when not.
-  bool shortMap(const PlaceDatabase& frames);
+  /// The short map's matcher when the own session's `frames` are a short map (the short window is on and they hold
+  /// at most 2 x exclusion_window + sequence_length frames), made when first needed; else null, and dropped.
+  RowMatcher* shortMapMatcher(const PlaceDatabase& frames);
   /// The matcher whose answers stand for `session` in the last match: the short map's for the own session then.
   const RowMatcher& matcherOf(uint32_t session) const;
   /// The candidate in `column` of `session`'s matcher.

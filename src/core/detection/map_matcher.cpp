@@ -90,7 +90,7 @@ size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, doubl
   return columns;
 }
 
-bool MapMatcher::shortMap(const PlaceDatabase& frames)
+RowMatcher* MapMatcher::shortMapMatcher(const PlaceDatabase& frames)
 {
   const int64_t most = 2 * int64_t(options_.exclusion_window) + options_.sequence_length;
   const bool is_short = options_.short_map_exclusion >= 0 &&
@@ -103,7 +103,7 @@ bool MapMatcher::shortMap(const PlaceDatabase& frames)
     short_matcher_ = makeMatcher(metric_.layout());
     short_matcher_->setSearching(searching_);
   }
-  return is_short;
+  return short_matcher_.get();
 }
 
 const RowMatcher& MapMatcher::matcherOf(uint32_t session) const
@@ -179,13 +179,14 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     const PlaceDatabase& frames = map.frames(s);
     size_t columns = candidateColumns(frames, own, stamp, options_.exclusion_window);
     RowMatcher* matcher = matchers_[s].get();
-    if (own && shortMap(frames))
+    RowMatcher* short_map = own ? shortMapMatcher(frames) : nullptr;
+    if (short_map)
     {
       // The session's own matcher goes on as without the short window (its state is what a longer map builds on);
       // the short map's matcher answers for the session.
       matcher->matchShifted(query.data(), shifted.data(), shifted.size() / words, frames, columns);
       columns = candidateColumns(frames, own, stamp, options_.short_map_exclusion);
-      matcher = short_matcher_.get();
+      matcher = short_map;
       short_answers_ = detection.short_map = true;
       own_session_ = s;
     }
