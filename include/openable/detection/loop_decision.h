@@ -142,8 +142,7 @@ public:
   /// begins: its first frames fit any pace, and off at once the prior let a slower path take the run).
   bool keepsSearching() const
   {
-    const size_t frames = static_cast<size_t>(std::max(0, options_.consistent_frames));
-    return frames_since_catch_up_ < frames || frames_since_fresh_start_ < frames;
+    return frames_since_search_kept_ < static_cast<size_t>(std::max(0, options_.consistent_frames));
   }
   /// The most places a published run's match may jump ahead of its line and the run goes on (catchesUp).
   static constexpr double kCatchUpPlaces = 5.0;
@@ -251,8 +250,8 @@ private:
     size_t frames_since = SIZE_MAX;  ///< frames decided after it
   };
   Jump jumped_ahead_;
-  size_t frames_since_catch_up_ = SIZE_MAX;  ///< frames decided since the last catch-up (keepsSearching)
-  size_t frames_since_fresh_start_ = SIZE_MAX;  ///< ... since a short map's run was first published (keepsSearching)
+  /// Frames decided since the last catch-up or short map's first published run (keepsSearching).
+  size_t frames_since_search_kept_ = SIZE_MAX;
   /// The run coasted through featureless frames (coast) and no frame has passed the gates itself since: it neither
   /// goes on nor resumes at continue_uniqueness.
   bool coasted_ = false;

@@ -62,6 +62,10 @@ struct Detection
   bool best_at_session_start = false;
 };
 
+/// Detection::best_at_session_start: the query's own session was a short map, and `best` is its first place
+/// (`first_id`, in session `own_session`), forwards. MapMatcher and CandidateMerger fill the field with it.
+bool atShortMapStart(const Candidate& best, bool short_map, uint32_t own_session, uint64_t first_id);
+
 /// Detection::excluded: no candidate, the query's own past is stored but all of it inside the exclusion
 /// (Detection::own_excluded), and no other session holds a frame (`other_frames`).
 bool onlyExcludedPast(const Detection& detection, size_t other_frames);
@@ -162,9 +166,8 @@ private:
 
   std::vector<std::unique_ptr<RowMatcher>> matchers_;  ///< one per session of the map, in map order
   std::unique_ptr<RowMatcher> short_matcher_;  ///< the own session's, with the short map's window (null: none)
-  bool short_answers_ = false;   ///< the last match took the own session's candidates from short_matcher_
-  uint32_t own_session_ = 0;     ///< the own session of the last match (with short_answers_)
-  bool searching_ = true;        ///< setSearching's last value, for a matcher made later
+  int short_session_ = -1;  ///< the session short_matcher_ answered for in the last match (-1: none)
+  bool searching_ = true;   ///< setSearching's last value, for a matcher made later
   FrameDescriptor last_query_;
   FrameDescriptor last_shifted_;  ///< the last query's shifted views (left, right), empty without
   /// One session's candidate column and its distance.

@@ -90,8 +90,7 @@ void LoopDecision::reset()
   reliefs_.clear();
   line_ = Line();
   jumped_ahead_ = Jump();
-  frames_since_catch_up_ = SIZE_MAX;
-  frames_since_fresh_start_ = SIZE_MAX;
+  frames_since_search_kept_ = SIZE_MAX;
   coasted_ = false;
 }
 
@@ -254,10 +253,8 @@ bool LoopDecision::uniqueEnoughToGoOn(const Detection& detection, FrameStatus wh
 FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck& geometry)
 {
   joined_before_.clear();
-  if (frames_since_catch_up_ != SIZE_MAX)
-    ++frames_since_catch_up_;
-  if (frames_since_fresh_start_ != SIZE_MAX)
-    ++frames_since_fresh_start_;
+  if (frames_since_search_kept_ != SIZE_MAX)
+    ++frames_since_search_kept_;
   if (jumped_ahead_.frames_since != SIZE_MAX)
     ++jumped_ahead_.frames_since;
   if (detection.has_candidates && std::isfinite(detection.relief))
@@ -457,7 +454,7 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
   if (!published_ && catches_up)
   {
     // The run goes on, on a line at the new best path's pace (its old slope is the lagging path's).
-    frames_since_catch_up_ = 0;
+    frames_since_search_kept_ = 0;
     return resumeRun(detection, detection.best.pace * detection.best.direction);
   }
   if (published_ && !was_published)
@@ -468,7 +465,7 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
     // day_right 0-59, revisit frames 70-79, 10 wrong loops at a window of 30, doc/results.md). A long map's revisit
     // has had its first frames too_early or excluded while the path settled.
     if (detection.short_map && !line_.valid)
-      frames_since_fresh_start_ = 0;
+      frames_since_search_kept_ = 0;
   }
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
 }

@@ -9,6 +9,11 @@
 
 namespace openable
 {
+bool atShortMapStart(const Candidate& best, bool short_map, uint32_t own_session, uint64_t first_id)
+{
+  return short_map && best.session == own_session && best.id == first_id && best.direction == 1;
+}
+
 bool onlyExcludedPast(const Detection& detection, size_t other_frames)
 {
   return detection.top.empty() && detection.own_excluded && other_frames == 0;
@@ -108,7 +113,7 @@ RowMatcher* MapMatcher::shortMapMatcher(const PlaceDatabase& frames)
 
 const RowMatcher& MapMatcher::matcherOf(uint32_t session) const
 {
-  return short_answers_ && session == own_session_ ? *short_matcher_ : *matchers_[session];
+  return static_cast<int>(session) == short_session_ ? *short_matcher_ : *matchers_[session];
 }
 
 Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_t column) const
@@ -172,7 +177,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   const size_t window = static_cast<size_t>(std::max(0, options_.uniqueness_window));
   std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
   picks.clear();
-  short_answers_ = false;
+  short_session_ = -1;
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
   {
     const bool own = static_cast<int>(s) == own_session;
@@ -187,8 +192,8 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
       matcher->matchShifted(query.data(), shifted.data(), shifted.size() / words, frames, columns);
       columns = candidateColumns(frames, own, stamp, options_.short_map_exclusion);
       matcher = short_map;
-      short_answers_ = detection.short_map = true;
-      own_session_ = s;
+      detection.short_map = true;
+      short_session_ = own_session;
     }
     detection.own_excluded = detection.own_excluded || (own && columns == 0 && !frames.empty());
     if (own && columns > 0 && columns < frames.size())
@@ -234,8 +239,9 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     detection.uniqueness = matchUniqueness(detection.best.distance,
                                            picks.size() < 2 ? std::nullopt : std::optional<float>(picks[1].distance));
     detection.relief = reliefAround(map, detection.best);
-    detection.best_at_session_start = detection.short_map && detection.best.session == own_session_ &&
-                                      detection.best.position == 0 && detection.best.direction == 1;
+    if (detection.short_map)
+      detection.best_at_session_start = atShortMapStart(detection.best, true, static_cast<uint32_t>(own_session),
+                                                        map.frames(static_cast<uint32_t>(own_session)).firstId());
   }
   return detection;
 }
@@ -300,7 +306,7 @@ void MapMatcher::setOptions(const MatchOptions& options)
   if (new_kind || options.short_map_exclusion != options_.short_map_exclusion)
   {
     short_matcher_.reset();  // the next short map's frame makes it afresh
-    short_answers_ = false;
+    short_session_ = -1;
   }
   if (new_kind)
   {

@@ -96,8 +96,7 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
     d.best = d.top.front();
     d.uniqueness =
         matchUniqueness(d.best.distance, all.size() < 2 ? std::nullopt : std::optional<float>(all[1].distance));
-    d.best_at_session_start = d.short_map && d.best.session == sessionIndex(out.query_session) &&
-                              d.best.id == own_first_id && d.best.direction == 1;
+    d.best_at_session_start = atShortMapStart(d.best, d.short_map, sessionIndex(out.query_session), own_first_id);
   }
 
   auto found = streams_.find(out.query_session);
