@@ -779,6 +779,35 @@ TEST(LoopDecision, AShortMapsFirstPlaceStartsNoRun)
   EXPECT_EQ(long_map.decide(candidate(0, 0.3f)), FrameStatus::Inconsistent);
 }
 
+// A short map's frames too early for a decision (fewer than min_candidates places, the revisit of a route shorter than
+// the exclusion window beginning) have a best match all the same (MapMatcher::earlyPicks): a run on its line reaches
+// back to them as to frames not unique, one off the line ends the reach-back. A long map's too early frames (the
+// stream's first, before any place may be compared) join nothing.
+TEST(LoopDecision, AShortMapsFramesTooEarlyJoinTheRunOnTheirLine)
+{
+  const auto early = [](uint64_t match, bool short_map)
+  {
+    Detection d = candidate(match, 0.0f, 0);  // no candidate counted: too early
+    d.short_map = short_map;
+    return d;
+  };
+  for (const bool short_map : {true, false})
+  {
+    LoopDecision decision(reachBackConfig(3, 1));
+    for (uint64_t m : {2, 5, 6, 7})
+    {
+      EXPECT_EQ(decision.decide(early(m, short_map)), FrameStatus::TooEarly);
+      EXPECT_EQ(decision.mayJoinLater(), short_map);
+    }
+    for (uint64_t m : {8, 9})
+      EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
+    EXPECT_EQ(decision.decide(candidate(10, 0.3f)), FrameStatus::Published);
+    const std::vector<size_t> expected =
+        short_map ? std::vector<size_t>{1, 2, 3, 4, 5} : std::vector<size_t>{1, 2};  // 9, 8, then 7, 6, 5; 2 is off
+    EXPECT_EQ(decision.joinedBefore(), expected) << (short_map ? "short map" : "long map");
+  }
+}
+
 // A short map's run first published with no published line before it keeps the matcher searching (its pace prior on)
 // for consistent_frames frames: a revisit's first frames fit any pace. A run on a long map, or one that restarts within
 // run_resume_frames of a published line, follows its path's pace at once.

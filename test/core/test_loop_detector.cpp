@@ -192,6 +192,51 @@ TEST(LoopDetector, AShortMapSaysWhenItsBestMatchIsTheSessionsFirstPlace)
   EXPECT_TRUE(detector.process(frames[2]).short_map);
 }
 
+// A short map revisited before its matcher holds a full sequence: the revisit's first frames count no candidate (too
+// early) but name their best paths, however short (MapMatcher::earlyPicks), for a run to reach back to. The places they
+// name are the ones revisited; without the short window (a long map's rule) those frames have no candidate at all.
+TEST(LoopDetector, AShortMapsRevisitNamesItsBestPlacesBeforeItsSequencesAreFull)
+{
+  std::mt19937_64 rng(35);
+  std::vector<FrameDescriptor> frames;
+  for (int i = 0; i < 12; ++i)
+    frames.push_back(openable_test::randomWords(rng, 22));
+  for (int i = 0; i < 8; ++i)
+  {
+    frames.push_back(frames[i]);
+    frames.back()[0] ^= rng() & 0xFF;  // a few bits of noise: nearly the same place
+  }
+  Config c = Config::paper();
+  c.sequence_length = 10;  // full sequences only (min_loop_sequence_length 0)
+  c.exclusion_window = 20;
+  c.short_map_exclusion = 8;  // places compared from frame 9 on: ten frames of evidence from frame 18
+  Config off = c;
+  off.short_map_exclusion = -1;
+  LoopDetector detector(c), without(off);
+  int named = 0;
+  for (int i = 0; i < 20; ++i)
+  {
+    const Detection d = detector.process(frames[i]);
+    EXPECT_FALSE(without.process(frames[i]).has_candidates) << i;
+    if (i <= 8)
+    {
+      EXPECT_FALSE(d.has_candidates) << i;  // nothing beyond the short window yet
+      continue;
+    }
+    EXPECT_TRUE(d.short_map) << i;
+    ASSERT_TRUE(d.has_candidates) << i;
+    if (i >= 12 && i < 17)  // the revisit's early frames: their own places, no candidate counted
+    {
+      EXPECT_EQ(d.candidates, 0u) << i;
+      EXPECT_EQ(d.best.id, uint64_t(i - 12)) << i;
+      ++named;
+    }
+    if (i == 19)
+      EXPECT_GT(d.candidates, 0u);  // ten frames matched: full sequences, counted
+  }
+  EXPECT_EQ(named, 5);
+}
+
 TEST(LoopDetector, TopKAreDistinctPlacesBestFirst)
 {
   Config c = Config::paper();

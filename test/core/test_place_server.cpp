@@ -303,3 +303,36 @@ TEST(AnswerCollector, ReleasesCompleteQueriesInStreamOrderAndWaitsBoundedForAMis
   EXPECT_EQ(released(collector.add(answer("b", "r2", 2), 0.8)), (V{"r2#1x1", "r2#2x2"}));
   EXPECT_EQ(collector.waiting(), 0u);
 }
+
+// A server whose short map has no candidate yet names its early ones (MapMatcher::earlyPicks, counted as none): they
+// stand in the merged answer only where no server counts a candidate, as in one MapMatcher over every session.
+TEST(CandidateMerger, AShortMapsEarlyPlacesStandOnlyWhereNoServerHasACandidate)
+{
+  Config config = Config::paper();
+  const auto place = [](uint64_t id, float distance)
+  {
+    ServerCandidate c;
+    c.session = "walker";
+    c.id = id;
+    c.distance = distance;
+    return c;
+  };
+  ServerCandidates early = answer("a", "walker", 12);
+  early.own_short_map = true;
+  early.top = {place(3, 0.1f), place(40, 0.4f)};
+  ServerCandidates counted = answer("b", "walker", 12);
+  counted.candidates = 500;
+  counted.top = {place(70, 0.3f), place(90, 0.35f)};
+  counted.top[0].session = counted.top[1].session = "other";
+  CandidateMerger alone(config), both(config);
+  const MergedOutcome only_early = alone.merge({early});
+  ASSERT_TRUE(only_early.detection.has_candidates);
+  EXPECT_EQ(only_early.detection.candidates, 0u);
+  EXPECT_EQ(only_early.detection.best.id, 3u);
+  EXPECT_EQ(only_early.status, FrameStatus::TooEarly);
+  const MergedOutcome merged = both.merge({early, counted});
+  EXPECT_EQ(merged.detection.candidates, 500u);
+  ASSERT_EQ(merged.detection.top.size(), 2u);
+  EXPECT_EQ(merged.top[0].id, 70u);  // the early place 3, nearer, is not a candidate beside counted ones
+  EXPECT_EQ(merged.top[1].id, 90u);
+}

@@ -268,8 +268,13 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
     line_ = Line{detection.best.id, runSlope(), detection.best.direction, detection.best.session, 0, true};
   else if (++line_.frames_since >= static_cast<size_t>(std::max(0, options_.run_resume_frames)))
     line_.valid = false;
-  const bool may_be_late =
-      status == FrameStatus::Inconsistent || (status == FrameStatus::NotUnique && detection.has_candidates);
+  // A short map's revisit begins before its map holds min_candidates places beyond the short window (a route of 40
+  // places walked again: frames 40-50 too early with the window of 30), so its first frames are too early, not
+  // unknown: their best match is the path's, and a run on its line reaches back to them as to frames not unique.
+  const bool too_early_in_short_map =
+      status == FrameStatus::TooEarly && detection.has_candidates && detection.short_map;
+  const bool may_be_late = status == FrameStatus::Inconsistent ||
+                           (status == FrameStatus::NotUnique && detection.has_candidates) || too_early_in_short_map;
   const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
   past_.push_back(Past{detection.best.id, detection.best.direction, detection.best.session, may_join, status,
                        detection.best.pace * detection.best.direction});

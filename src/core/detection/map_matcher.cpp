@@ -70,6 +70,23 @@ int MapMatcher::minTerms() const
   return least == 0 ? options_.sequence_length : std::min(least, options_.sequence_length);
 }
 
+int MapMatcher::termsAsked() const
+{
+  return early_ ? 1 : minTerms();
+}
+
+void MapMatcher::earlyPicks(std::vector<Pick>& picks, size_t wanted, size_t window)
+{
+  // A route walked again sooner than min_candidates places beyond the short window (40 places: the revisit's frames
+  // 40-50) has no candidate at its revisit's first frames: too early, and a run could not reach back to them (their
+  // best match unknown). Their best paths, however short, are that evidence: the frames stay too early (no
+  // candidate is counted, so nothing is decided on them) and a consistent run joins those on its line.
+  early_ = true;
+  short_matcher_->smallestDistinct(wanted, window, termsAsked(), taken_);
+  for (size_t column : taken_)
+    picks.push_back({short_matcher_->normalized(column, nullptr, termsAsked()), static_cast<uint32_t>(short_session_), column});
+}
+
 size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp, int excluded_frames) const
 {
   if (!own)
@@ -122,7 +139,7 @@ Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_
   const PlaceDatabase& frames = map.frames(session);
   Candidate c;
   int direction = 1;
-  c.distance = matcher.normalized(column, &direction, minTerms());
+  c.distance = matcher.normalized(column, &direction, termsAsked());
   c.sequence_length = matcher.terms(column, direction);
   c.pace = matcher.pace(column);
   c.direction = static_cast<int8_t>(direction);
@@ -178,6 +195,7 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
   picks.clear();
   short_session_ = -1;
+  early_ = false;
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
   {
     const bool own = static_cast<int>(s) == own_session;
@@ -207,6 +225,8 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     for (size_t column : taken_)
       picks.push_back({matcher->normalized(column, nullptr, minTerms()), s, column});
   }
+  if (detection.candidates == 0 && short_session_ >= 0)
+    earlyPicks(picks, wanted, window);
   // By distance; ties to the earlier session, then the lower column (as one scan would).
   std::stable_sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance < b.distance; });
   if (picks.size() > wanted)

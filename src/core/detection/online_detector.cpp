@@ -456,10 +456,12 @@ std::vector<FrameOutcome> OnlineDetector::decideAndConfirm(Channel channel, cons
       outcome.status = FrameStatus::FailedVerification;
   }
   // A frame that may join a later run: as the decision says, unless verification must accept every loop closure
-  // and did not check it (not-unique frames are not verified: that would be every frame).
+  // and did not check it (not-unique frames are not verified: that would be every frame, nor a short map's too early
+  // ones, which the decision lets join).
   const bool strict = options_.verify && (config_.verification_veto || options_.verify_required);
-  const bool may_join = decision.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent ||
-                                                    (outcome.status == FrameStatus::NotUnique && !strict));
+  const bool unchecked = outcome.status == FrameStatus::NotUnique || outcome.status == FrameStatus::TooEarly;
+  const bool may_join =
+      decision.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent || (unchecked && !strict));
   std::vector<FrameOutcome> confirmed =
       channel.confirmation.stored(outcome, decision.joinedBefore(), may_join, decision.ownFramesBefore());
   placeInHindsight(confirmed, outcome);

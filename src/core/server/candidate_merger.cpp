@@ -48,9 +48,13 @@ MergedOutcome CandidateMerger::merge(std::vector<ServerCandidates> answers)
   uint64_t own_first_id = 0;
   Detection& d = out.detection;
   for (const ServerCandidates& a : answers)
-  {
-    all.insert(all.end(), a.top.begin(), a.top.end());
     d.candidates += a.candidates;
+  for (const ServerCandidates& a : answers)
+  {
+    // A server that counts no candidate may still name a short map's early ones (MapMatcher::earlyPicks): they
+    // stand only where no server has a candidate, as in one MapMatcher.
+    if (a.candidates > 0 || d.candidates == 0)
+      all.insert(all.end(), a.top.begin(), a.top.end());
     d.own_excluded = d.own_excluded || a.own_excluded;
     if (a.has_own_edge)  // only the server that holds the query's session cuts it
     {
