@@ -565,6 +565,7 @@ TEST(LoopDecision, GeometryIsAskedOnlyForFramesThatLackAppearanceEvidence)
   CountingGeometry geometry;
   EXPECT_EQ(decision.decide(candidate(40, 0.01f), geometry.check()), FrameStatus::NotUnique);  // below 0.02
   EXPECT_EQ(decision.decide(Detection(), geometry.check()), FrameStatus::TooEarly);           // no candidate
+  EXPECT_EQ(decision.decide(candidate(40, 0.5f, 0), geometry.check()), FrameStatus::TooEarly);  // a short map's early place
   EXPECT_EQ(geometry.asked, 0);
   // Fewer than min_candidates places (10): geometry stands in for the minimum too.
   EXPECT_EQ(decision.decide(candidate(40, 0.5f, 5), geometry.check()), FrameStatus::Inconsistent);

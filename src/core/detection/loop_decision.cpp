@@ -119,9 +119,11 @@ bool LoopDecision::geometryMayStandIn(const Detection& detection, FrameStatus wh
   // run: verification accepts a place 3 or 4 frames off as readily as the right one (same room, 30 to 57
   // inliers), and at the start of a revisit the sequences lag by that much. Publishing a verified frame
   // without a consistent run put 9 such near misses among 143 loops on Gardens Point day_right -> day_left.
-  // (A frame too early never met the distance gate: it is checked here.)
+  // (A frame too early never met the distance gate: it is checked here. A short map's early places, no candidate
+  // counted, are only for a run to reach back to: MapMatcher::earlyPicks.)
   const bool wants_evidence = why == FrameStatus::NotUnique || why == FrameStatus::TooEarly;
-  return options_.verified_min_uniqueness >= 0.0 && detection.has_candidates && wants_evidence &&
+  return options_.verified_min_uniqueness >= 0.0 && detection.has_candidates && detection.candidates > 0 &&
+         wants_evidence &&
          !aboveThreshold(detection) && detection.uniqueness >= options_.verified_min_uniqueness;
 }
 
