@@ -782,8 +782,8 @@ TEST(LoopDecision, AShortMapsFirstPlaceStartsNoRun)
 
 // A short map's frames too early for a decision (fewer than min_candidates places, the revisit of a route shorter than
 // the exclusion window beginning) have a best match all the same (MapMatcher::earlyPicks): a run on its line reaches
-// back to them as to frames not unique, one off the line ends the reach-back. A long map's too early frames (the
-// stream's first, before any place may be compared) join nothing.
+// back to them as to frames not unique, one off the line ends the reach-back; not one matched at the map's first place.
+// A long map's too early frames (the stream's first, before any place may be compared) join nothing.
 TEST(LoopDecision, AShortMapsFramesTooEarlyJoinTheRunOnTheirLine)
 {
   const auto early = [](uint64_t match, bool short_map)
@@ -807,6 +807,12 @@ TEST(LoopDecision, AShortMapsFramesTooEarlyJoinTheRunOnTheirLine)
         short_map ? std::vector<size_t>{1, 2, 3, 4, 5} : std::vector<size_t>{1, 2};  // 9, 8, then 7, 6, 5; 2 is off
     EXPECT_EQ(decision.joinedBefore(), expected) << (short_map ? "short map" : "long map");
   }
+  // Not at the map's first place (the first pass's last frames match it; it starts no run either).
+  LoopDecision decision(reachBackConfig(3, 1));
+  Detection first_place = early(0, true);
+  first_place.best_at_session_start = true;
+  EXPECT_EQ(decision.decide(first_place), FrameStatus::TooEarly);
+  EXPECT_FALSE(decision.mayJoinLater());
 }
 
 // A short map's run first published with no published line before it keeps the matcher searching (its pace prior on)

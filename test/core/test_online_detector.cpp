@@ -277,12 +277,12 @@ TEST(OnlineDetector, ARouteShorterThanTheExclusionWindowGetsLoopsFromAShortMapsO
 // A route of 40 places walked again: the revisit's first frames come before the short map holds min_candidates
 // places beyond its window (frames 40-50 of the stream), too early for a decision. Their own best paths, short as they
 // are, lie on the line of the run that follows, which reaches back to them as to frames not unique: the revisit's
-// first frames get loops, late, and none is wrong. Measured (default.yaml): day_left then day_right 0-39 0.650 -> 0.900,
-// day_right then night_right 0-39 0.650 -> 0.775; the routes of 40 places of scripts/pace_sets.py 32.76 -> 34.74.
+// first frames get loops, late, and none is wrong. Measured (default.yaml): day_left then day_right 0-39 0.650 -> 0.850,
+// day_right then night_right 0-39 0.650 -> 0.775; the routes of 40 places of scripts/pace_sets.py 32.76 -> 34.62.
 TEST(OnlineDetector, ARevisitsFirstFramesTooEarlyForAShortMapJoinItsRunLate)
 {
   const Config config = shipped("default");
-  for (const auto& [first, second, least] : {std::make_tuple("day_left", "day_right", 0.85),
+  for (const auto& [first, second, least] : {std::make_tuple("day_left", "day_right", 0.8),
                                              std::make_tuple("day_right", "night_right", 0.75)})
   {
     const auto& whole = gardensPointStream(first, second);

@@ -273,8 +273,10 @@ FrameStatus LoopDecision::decide(const Detection& detection, const GeometryCheck
   // A short map's revisit begins before its map holds min_candidates places beyond the short window (a route of 40
   // places walked again: frames 40-50 too early with the window of 30), so its first frames are too early, not
   // unknown: their best match is the path's, and a run on its line reaches back to them as to frames not unique.
-  const bool too_early_in_short_map =
-      status == FrameStatus::TooEarly && detection.has_candidates && detection.short_map;
+  // Not at the map's first place, which starts no run either (startsNoRun): the first pass's last frames match it
+  // (GP day_right then night_right 125-166, with a run whose line passed a place ahead: frame 41 joined at place 0).
+  const bool too_early_in_short_map = status == FrameStatus::TooEarly && detection.has_candidates &&
+                                      detection.short_map && !detection.best_at_session_start;
   const bool may_be_late = status == FrameStatus::Inconsistent ||
                            (status == FrameStatus::NotUnique && detection.has_candidates) || too_early_in_short_map;
   const bool may_join = options_.run_start_tolerance >= 0 && may_be_late;
