@@ -33,7 +33,9 @@ struct Candidate
 struct Detection
 {
   uint64_t query_id = 0;
-  bool has_candidates = false;  ///< false while nothing can be compared yet (start, exclusion window)
+  /// false while nothing can be compared yet (start, exclusion window). True with `candidates` 0: a short map's early
+  /// places (MapMatcher::earlyPicks), named for a later run to reach back to, too early for a decision.
+  bool has_candidates = false;
   bool excluded = false;        ///< no candidates although frames are stored: all inside the exclusion
   bool own_excluded = false;    ///< the query's own session holds frames, all of them inside the exclusion
   size_t candidates = 0;        ///< reference frames compared with a sequence long enough to be a candidate
@@ -180,11 +182,11 @@ private:
     uint32_t session;
     size_t column;
   };
-  std::vector<size_t> taken_;  ///< scratch: one session's best distinct columns
-  std::vector<Pick> picks_;    ///< scratch: every session's, then the best of them
   /// A short map's candidates before the map holds enough evidence for any (the frames of a revisit's start on a
   /// route shorter than the exclusion window): its best paths of any length, counted as no candidate.
   void earlyPicks(std::vector<Pick>& picks, size_t wanted, size_t window);
+  std::vector<size_t> taken_;  ///< scratch: one session's best distinct columns
+  std::vector<Pick> picks_;    ///< scratch: every session's, then the best of them
 };
 
 }  // namespace openable

@@ -74,7 +74,9 @@ struct ServerCandidates
   bool stored = false;        ///< this server owns the query's session and stored the frame as query_id
   uint64_t query_id = 0;      ///< id within the session (valid when stored)
   size_t candidates = 0;      ///< places compared with a sequence long enough to be a candidate
-  std::vector<ServerCandidate> top;  ///< best first, up to max(top_k, 2) distinct places
+  /// best first, up to max(top_k, 2) distinct places; with `candidates` 0, a short map's early places
+  /// (MapMatcher::earlyPicks), which the merger keeps only where no server counts a candidate
+  std::vector<ServerCandidate> top;
   bool own_excluded = false;  ///< the query's own past is here but all of it inside the exclusion
   /// The exclusion cut the query's own past here: own_edge_id is the newest of its places compared (a match
   /// there starts no run, LoopDecision).

@@ -123,8 +123,7 @@ bool LoopDecision::geometryMayStandIn(const Detection& detection, FrameStatus wh
   // counted, are only for a run to reach back to: MapMatcher::earlyPicks.)
   const bool wants_evidence = why == FrameStatus::NotUnique || why == FrameStatus::TooEarly;
   return options_.verified_min_uniqueness >= 0.0 && detection.has_candidates && detection.candidates > 0 &&
-         wants_evidence &&
-         !aboveThreshold(detection) && detection.uniqueness >= options_.verified_min_uniqueness;
+         wants_evidence && !aboveThreshold(detection) && detection.uniqueness >= options_.verified_min_uniqueness;
 }
 
 bool LoopDecision::aboveThreshold(const Detection& detection) const

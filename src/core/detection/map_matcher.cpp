@@ -83,8 +83,9 @@ void MapMatcher::earlyPicks(std::vector<Pick>& picks, size_t wanted, size_t wind
   // candidate is counted, so nothing is decided on them) and a consistent run joins those on its line.
   early_ = true;
   short_matcher_->smallestDistinct(wanted, window, termsAsked(), taken_);
+  const auto session = static_cast<uint32_t>(short_session_);
   for (size_t column : taken_)
-    picks.push_back({short_matcher_->normalized(column, nullptr, termsAsked()), static_cast<uint32_t>(short_session_), column});
+    picks.push_back({short_matcher_->normalized(column, nullptr, termsAsked()), session, column});
 }
 
 size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp, int excluded_frames) const
