@@ -782,7 +782,8 @@ TEST(LoopDecision, AShortMapsFirstPlaceStartsNoRun)
 
 // A short map's frames too early for a decision (fewer than min_candidates places, the revisit of a route shorter than
 // the exclusion window beginning) have a best match all the same (MapMatcher::earlyPicks): a run on its line reaches
-// back to them as to frames not unique, one off the line ends the reach-back; not one matched at the map's first place.
+// back to them as to frames not unique (up to kMaxSkipped in a row off its line passed over); not one matched at the
+// map's first place.
 // A long map's too early frames (the stream's first, before any place may be compared) join nothing.
 TEST(LoopDecision, AShortMapsFramesTooEarlyJoinTheRunOnTheirLine)
 {
@@ -795,7 +796,7 @@ TEST(LoopDecision, AShortMapsFramesTooEarlyJoinTheRunOnTheirLine)
   for (const bool short_map : {true, false})
   {
     LoopDecision decision(reachBackConfig(3, 1));
-    for (uint64_t m : {2, 5, 6, 7})
+    for (uint64_t m : {1, 20, 21, 22, 4, 5, 12, 7})
     {
       EXPECT_EQ(decision.decide(early(m, short_map)), FrameStatus::TooEarly);
       EXPECT_EQ(decision.mayJoinLater(), short_map);
@@ -803,8 +804,9 @@ TEST(LoopDecision, AShortMapsFramesTooEarlyJoinTheRunOnTheirLine)
     for (uint64_t m : {8, 9})
       EXPECT_EQ(decision.decide(candidate(m, 0.3f)), FrameStatus::Inconsistent);
     EXPECT_EQ(decision.decide(candidate(10, 0.3f)), FrameStatus::Published);
+    // 9, 8, 7, then 12 passed over (off the line, as a frame not unique may be), 5, 4; three off in a row end it.
     const std::vector<size_t> expected =
-        short_map ? std::vector<size_t>{1, 2, 3, 4, 5} : std::vector<size_t>{1, 2};  // 9, 8, then 7, 6, 5; 2 is off
+        short_map ? std::vector<size_t>{1, 2, 3, 5, 6} : std::vector<size_t>{1, 2};
     EXPECT_EQ(decision.joinedBefore(), expected) << (short_map ? "short map" : "long map");
   }
   // Not at the map's first place (the first pass's last frames match it; it starts no run either).

@@ -278,7 +278,7 @@ TEST(OnlineDetector, ARouteShorterThanTheExclusionWindowGetsLoopsFromAShortMapsO
 // places beyond its window (frames 40-50 of the stream), too early for a decision. Their own best paths, short as they
 // are, lie on the line of the run that follows, which reaches back to them as to frames not unique: the revisit's
 // first frames get loops, late, and none is wrong. Measured (default.yaml): day_left then day_right 0-39 0.650 -> 0.850,
-// day_right then night_right 0-39 0.650 -> 0.775; the routes of 40 places of scripts/pace_sets.py 32.76 -> 34.62.
+// day_right then night_right 0-39 0.650 -> 0.775; the routes of 40 places of scripts/pace_sets.py 32.76 -> 34.86.
 TEST(OnlineDetector, ARevisitsFirstFramesTooEarlyForAShortMapJoinItsRunLate)
 {
   const Config config = shipped("default");

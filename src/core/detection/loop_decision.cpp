@@ -490,8 +490,8 @@ std::vector<size_t> LoopDecision::framesOnLineBefore(double pace) const
   // A published frame is counted too: the last ones of a run that broke before they were confirmed are still
   // held (LoopConfirmation), and a run on their line takes them; the ones that went out are not held any more,
   // and the confirmation joins only what it holds.
-  // Up to kMaxSkipped not-unique frames in a row off the line (a look-alike place for a frame or two) are passed
-  // over, not joined: GP day_right then day_left, matches 2 and 3 places off at revisit frames 30-31 ended the
+  // Up to kMaxSkipped not-unique frames in a row off the line (a look-alike place for a frame or two; or a short map's
+  // too-early frames, whose paths are a few frames long) are passed over, not joined: GP day_right then day_left, matches 2 and 3 places off at revisit frames 30-31 ended the
   // reach-back there, with the frames before them on the line. A frame unique enough but off the line is not a
   // look-alike place: the run's own sequence disagreed there (a lagging start), and the reach-back ends (passing
   // over those too joined frames 3 places off at the start of a session continued from a map).
@@ -542,7 +542,7 @@ std::vector<size_t> LoopDecision::framesOnLineBefore(double pace) const
       joined.push_back(back);
       skipped = 0;
     }
-    else if (p->status != FrameStatus::NotUnique || ++skipped > kMaxSkipped)
+    else if ((p->status != FrameStatus::NotUnique && p->status != FrameStatus::TooEarly) || ++skipped > kMaxSkipped)
       break;
   }
   return joined;
