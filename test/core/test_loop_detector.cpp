@@ -31,6 +31,21 @@ std::vector<FrameDescriptor> revisitingStream()
   }
   return frames;
 }
+
+/// A route of `places` random LDB-sized places, then its first `revisited` places again, each with a few bits of noise.
+std::vector<FrameDescriptor> routeWalkedAgain(uint64_t seed, int places, int revisited)
+{
+  std::mt19937_64 rng(seed);
+  std::vector<FrameDescriptor> frames;
+  for (int i = 0; i < places; ++i)
+    frames.push_back(openable_test::randomWords(rng, 22));
+  for (int i = 0; i < revisited; ++i)
+  {
+    frames.push_back(frames[i]);
+    frames.back()[0] ^= rng() & 0xFF;  // a few bits of noise: nearly the same place
+  }
+  return frames;
+}
 }  // namespace
 
 TEST(LoopDetector, FindsRevisitsWithSequencesAndAcceptsBelowThreshold)
@@ -154,15 +169,7 @@ TEST(LoopDetector, AShortMapIsComparedBeyondItsShortWindowAndALongerMapAsWithout
 // partial sequence ending there has no past (LoopDecision starts no run from it).
 TEST(LoopDetector, AShortMapSaysWhenItsBestMatchIsTheSessionsFirstPlace)
 {
-  std::mt19937_64 rng(34);
-  std::vector<FrameDescriptor> frames;
-  for (int i = 0; i < 15; ++i)
-    frames.push_back(openable_test::randomWords(rng, 22));
-  for (int i = 0; i < 2; ++i)
-  {
-    frames.push_back(frames[i]);
-    frames.back()[0] ^= rng() & 0xFF;
-  }
+  const std::vector<FrameDescriptor> frames = routeWalkedAgain(34, 15, 2);
   Config c = Config::paper();
   c.sequence_length = 5;
   c.exclusion_window = 20;
@@ -197,15 +204,7 @@ TEST(LoopDetector, AShortMapSaysWhenItsBestMatchIsTheSessionsFirstPlace)
 // name are the ones revisited; without the short window (a long map's rule) those frames have no candidate at all.
 TEST(LoopDetector, AShortMapsRevisitNamesItsBestPlacesBeforeItsSequencesAreFull)
 {
-  std::mt19937_64 rng(35);
-  std::vector<FrameDescriptor> frames;
-  for (int i = 0; i < 12; ++i)
-    frames.push_back(openable_test::randomWords(rng, 22));
-  for (int i = 0; i < 8; ++i)
-  {
-    frames.push_back(frames[i]);
-    frames.back()[0] ^= rng() & 0xFF;  // a few bits of noise: nearly the same place
-  }
+  const std::vector<FrameDescriptor> frames = routeWalkedAgain(35, 12, 8);
   Config c = Config::paper();
   c.sequence_length = 10;  // full sequences only (min_loop_sequence_length 0)
   c.exclusion_window = 20;
@@ -232,7 +231,9 @@ TEST(LoopDetector, AShortMapsRevisitNamesItsBestPlacesBeforeItsSequencesAreFull)
       ++named;
     }
     if (i == 19)
+    {
       EXPECT_GT(d.candidates, 0u);  // ten frames matched: full sequences, counted
+    }
   }
   EXPECT_EQ(named, 5);
 }

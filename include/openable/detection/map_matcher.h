@@ -151,11 +151,9 @@ private:
   RowMatcher* shortMapMatcher(const PlaceDatabase& frames);
   /// The matcher whose answers stand for `session` in the last match: the short map's for the own session then.
   const RowMatcher& matcherOf(uint32_t session) const;
-  /// The candidate in `column` of `session`'s matcher.
-  Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column) const;
+  /// The candidate in `column` of `session`'s matcher, its sequence of at least `min_terms` frames.
+  Candidate candidateAt(const SessionMap& map, uint32_t session, size_t column, int min_terms) const;
   int minTerms() const;
-  /// The terms a candidate of the last match needed: one while its picks are a short map's early ones.
-  int termsAsked() const;
   /// Candidate::shift with shifted views: which of the last query's views (-1 left, 0 centre, +1 right) is nearest
   /// `place`.
   int viewNearest(const uint64_t* place) const;
@@ -171,7 +169,6 @@ private:
   std::vector<std::unique_ptr<RowMatcher>> matchers_;  ///< one per session of the map, in map order
   std::unique_ptr<RowMatcher> short_matcher_;  ///< the own session's, with the short map's window (null: none)
   int short_session_ = -1;  ///< the session short_matcher_ answered for in the last match (-1: none)
-  bool early_ = false;  ///< the last match's candidates are a short map's early ones (earlyPicks): one term enough
   bool searching_ = true;   ///< setSearching's last value, for a matcher made later
   FrameDescriptor last_query_;
   FrameDescriptor last_shifted_;  ///< the last query's shifted views (left, right), empty without
@@ -185,6 +182,8 @@ private:
   /// A short map's candidates before the map holds enough evidence for any (the frames of a revisit's start on a
   /// route shorter than the exclusion window): its best paths of any length, counted as no candidate.
   void earlyPicks(std::vector<Pick>& picks, size_t wanted, size_t window);
+  /// The frames of evidence an early place needs: any.
+  static constexpr int kEarlyTerms = 1;
   std::vector<size_t> taken_;  ///< scratch: one session's best distinct columns
   std::vector<Pick> picks_;    ///< scratch: every session's, then the best of them
 };

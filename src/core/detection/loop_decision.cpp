@@ -491,10 +491,11 @@ std::vector<size_t> LoopDecision::framesOnLineBefore(double pace) const
   // held (LoopConfirmation), and a run on their line takes them; the ones that went out are not held any more,
   // and the confirmation joins only what it holds.
   // Up to kMaxSkipped not-unique frames in a row off the line (a look-alike place for a frame or two; or a short map's
-  // too-early frames, whose paths are a few frames long) are passed over, not joined: GP day_right then day_left, matches 2 and 3 places off at revisit frames 30-31 ended the
-  // reach-back there, with the frames before them on the line. A frame unique enough but off the line is not a
-  // look-alike place: the run's own sequence disagreed there (a lagging start), and the reach-back ends (passing
-  // over those too joined frames 3 places off at the start of a session continued from a map).
+  // too-early frames, whose paths are a few frames long) are passed over, not joined: GP day_right then day_left,
+  // matches 2 and 3 places off at revisit frames 30-31 ended the reach-back there, with the frames before them on the
+  // line. A frame unique enough but off the line is not a look-alike place: the run's own sequence disagreed there (a
+  // lagging start), and the reach-back ends (passing over those too joined frames 3 places off at the start of a
+  // session continued from a map).
   // A held published frame (its run broke before confirm_frames more went on with it) passed the gates and kept to
   // its own run's line within consistency_tolerance: it joins a run whose line passes that close, when the frame
   // after it joined too. Where the pace eases for a few frames the sequence lags, its run breaks as the match jumps

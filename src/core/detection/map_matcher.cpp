@@ -70,22 +70,16 @@ int MapMatcher::minTerms() const
   return least == 0 ? options_.sequence_length : std::min(least, options_.sequence_length);
 }
 
-int MapMatcher::termsAsked() const
-{
-  return early_ ? 1 : minTerms();
-}
-
 void MapMatcher::earlyPicks(std::vector<Pick>& picks, size_t wanted, size_t window)
 {
   // A route walked again sooner than min_candidates places beyond the short window (40 places: the revisit's frames
   // 40-50) has no candidate at its revisit's first frames: too early, and a run could not reach back to them (their
   // best match unknown). Their best paths, however short, are that evidence: the frames stay too early (no
   // candidate is counted, so nothing is decided on them) and a consistent run joins those on its line.
-  early_ = true;
-  short_matcher_->smallestDistinct(wanted, window, termsAsked(), taken_);
+  short_matcher_->smallestDistinct(wanted, window, kEarlyTerms, taken_);
   const auto session = static_cast<uint32_t>(short_session_);
   for (size_t column : taken_)
-    picks.push_back({short_matcher_->normalized(column, nullptr, termsAsked()), session, column});
+    picks.push_back({short_matcher_->normalized(column, nullptr, kEarlyTerms), session, column});
 }
 
 size_t MapMatcher::candidateColumns(const PlaceDatabase& frames, bool own, double stamp, int excluded_frames) const
@@ -134,13 +128,13 @@ const RowMatcher& MapMatcher::matcherOf(uint32_t session) const
   return static_cast<int>(session) == short_session_ ? *short_matcher_ : *matchers_[session];
 }
 
-Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_t column) const
+Candidate MapMatcher::candidateAt(const SessionMap& map, uint32_t session, size_t column, int min_terms) const
 {
   const RowMatcher& matcher = matcherOf(session);
   const PlaceDatabase& frames = map.frames(session);
   Candidate c;
   int direction = 1;
-  c.distance = matcher.normalized(column, &direction, termsAsked());
+  c.distance = matcher.normalized(column, &direction, min_terms);
   c.sequence_length = matcher.terms(column, direction);
   c.pace = matcher.pace(column);
   c.direction = static_cast<int8_t>(direction);
@@ -196,7 +190,6 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   std::vector<Pick>& picks = picks_;  // reused: no allocation per frame
   picks.clear();
   short_session_ = -1;
-  early_ = false;
   for (uint32_t s = 0; s < map.sessionCount(); ++s)
   {
     const bool own = static_cast<int>(s) == own_session;
@@ -226,8 +219,10 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
     for (size_t column : taken_)
       picks.push_back({matcher->normalized(column, nullptr, minTerms()), s, column});
   }
-  if (detection.candidates == 0 && short_session_ >= 0)
+  const bool early = detection.candidates == 0 && short_session_ >= 0;
+  if (early)
     earlyPicks(picks, wanted, window);
+  const int terms = early ? kEarlyTerms : minTerms();
   // By distance; ties to the earlier session, then the lower column (as one scan would).
   std::stable_sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) { return a.distance < b.distance; });
   if (picks.size() > wanted)
@@ -236,12 +231,12 @@ Detection MapMatcher::match(const FrameDescriptor& query, const SessionMap& map,
   {
     // Each path's end placed between the paces followed (its distance and pace stay the path's): each candidate is
     // its own session's, so place servers that split the sessions report what one server would.
-    Candidate c = candidateAt(map, picks[i].session, picks[i].column);
+    Candidate c = candidateAt(map, picks[i].session, picks[i].column, terms);
     const size_t refined = matcherOf(picks[i].session).refinedColumn(picks[i].column);
     if (refined != picks[i].column)
     {
       const Candidate path = c;
-      c = candidateAt(map, picks[i].session, refined);
+      c = candidateAt(map, picks[i].session, refined, terms);
       c.distance = path.distance;
       c.pace = path.pace;
     }
