@@ -260,6 +260,31 @@ TEST(LoopDecision, FramesBeforeARunJoinOnTheLineOfItsPathsPace)
   EXPECT_EQ(decideStream(1.0f), (std::vector<size_t>{1, 2, 3, 4, 5, 6, 8}));
 }
 
+// Once the reach-back goes on along the path's line alone, a frame that passed the gates itself (Inconsistent) is
+// still judged on the run's line: its own run began on a slower path at the revisit's start (GP day_right then
+// day_left 140-199, the view channel: revisit frames 71-80 cut off behind frames joined on the path's line). A frame
+// that was not unique is not: past the path's line it is passed over, as before.
+TEST(LoopDecision, AFrameThatPassedTheGatesJoinsOnTheRunsLineAfterThePathsLineAlone)
+{
+  const Config c = reachBackConfig(6, 1);
+  const auto decideStream = [&](float first_uniqueness)
+  {
+    LoopDecision decision(c);
+    for (uint64_t m : {31, 32, 33})  // a slower path's frames, unique or not
+      decision.decide(paced(m, 0.75f, first_uniqueness));
+    for (uint64_t m : {32, 33, 35, 36, 37, 38})  // not unique, at the run's path's pace
+      EXPECT_EQ(decision.decide(paced(m, 1.15f, 0.05f)), FrameStatus::NotUnique) << m;
+    for (uint64_t m : {40, 41, 42, 43, 44})
+      EXPECT_EQ(decision.decide(paced(m, 1.15f)), FrameStatus::Inconsistent) << m;
+    EXPECT_EQ(decision.decide(paced(45, 1.15f)), FrameStatus::Published);
+    return decision.joinedBefore();
+  };
+  // The run's line 45 - k takes 44 .. 38 (back 1-6, 38 one off) and 37, 36, 35; 33 and 32 are 2 off it but on the
+  // path's line (45 - 1.15 k: 33.5, 32.35). Then 33, 32, 31 lie on the run's line exactly, 1.8 and more off the path's.
+  EXPECT_EQ(decideStream(0.3f), (std::vector<size_t>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14}));
+  EXPECT_EQ(decideStream(0.05f), (std::vector<size_t>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}));
+}
+
 // On the path's line a frame joins within run_start_tolerance only, never the wider tolerance (consistency_tolerance)
 // of a held frame of a broken run: a run that broke lagging the revisit would join the next run's line places off
 // (the place server, GP day_left then night_right: night_right 41 as day_left 38).
@@ -429,7 +454,9 @@ void expectNaiveReference(bool geometry)
             const int tolerance =
                 held_run_frame ? std::max(c.run_start_tolerance, c.consistency_tolerance) : c.run_start_tolerance;
             const Detection& earlier = seen[seen.size() - 1 - back];
-            const bool on_run_line = !path_only && std::fabs(double(earlier.best.id) - line) <= tolerance;
+            // (but a frame that passed the gates itself, Inconsistent, is judged on the run's line still)
+            const bool run_line_holds = !path_only || statuses[statuses.size() - back] == FrameStatus::Inconsistent;
+            const bool on_run_line = run_line_holds && std::fabs(double(earlier.best.id) - line) <= tolerance;
             const bool on_path_line =
                 path_agrees && std::fabs(earlier.best.pace - pace) <= LoopDecision::kSamePace * pace &&
                 std::fabs(double(earlier.best.id) - (matches.back() - pace * static_cast<double>(back))) <=

@@ -513,6 +513,11 @@ std::vector<size_t> LoopDecision::framesOnLineBefore(double pace) const
   // place server, night_right 41 as day_left 38) would join the next run's line 2 places off. doc/results.md: 3x
   // 0.761 -> 0.821; summed recall pace 52.13 -> 52.28, holdout 21.63 -> 21.94, short 37.27 -> 37.58, one more wrong
   // loop over the 220 streams.
+  // A frame that passed the gates itself (Inconsistent: unique, its run not yet long enough) joins on the run's line
+  // even after the reach-back went on along the path's line alone: its own run followed a slower path at the
+  // revisit's start, so it is off the path's line, but its matches were the run's. GP day_right then day_left 140-199
+  // in the view channel: revisit frames 71-80, uniqueness 0.062-0.082 and 0 or 1 place off, were cut off behind 81-89,
+  // joined on the path's line (doc/results.md).
   std::vector<size_t> joined;
   if (options_.run_start_tolerance < 0 || recent_.size() < 2)
     return joined;
@@ -536,7 +541,8 @@ std::vector<size_t> LoopDecision::framesOnLineBefore(double pace) const
     const bool on_path_line = path_agrees && std::fabs(p->pace - pace) <= kSamePace * std::fabs(pace) &&
                               std::fabs(static_cast<double>(p->id) - (last - pace * static_cast<double>(back))) <=
                                   options_.run_start_tolerance;
-    const bool on_run_line = !path_only && std::fabs(static_cast<double>(p->id) - expected) <= tolerance;
+    const bool run_line_holds = !path_only || p->status == FrameStatus::Inconsistent;
+    const bool on_run_line = run_line_holds && std::fabs(static_cast<double>(p->id) - expected) <= tolerance;
     if (on_run_line || on_path_line)
     {
       path_only = path_only || !on_run_line;
