@@ -300,6 +300,26 @@ TEST(OnlineDetector, ARevisitsFirstFramesTooEarlyForAShortMapJoinItsRunLate)
   }
 }
 
+// A run's first frames that passed the gates themselves join it on its line, even where the frames between them and
+// the run joined on the best path's line alone (LoopDecision::framesOnLineBefore). GP day_right then day_left 140-199
+// walked again: the view channel's revisit frames 11-20 (uniqueness 0.062-0.082, its run 10 of 12 frames when a dip
+// broke it) were lost behind frames 21-29; now 15-20 join (14 lies 1.5 places off the line), recall 0.600 -> 0.700
+// (doc/results.md "A run's unique first frames").
+TEST(OnlineDetector, ARunsUniqueFirstFramesJoinItOnItsLine)
+{
+  const auto& whole = gardensPointStream("day_right", "day_left");
+  std::vector<cv::Mat> frames(whole.begin() + 140, whole.begin() + 200);
+  frames.insert(frames.end(), whole.begin() + 340, whole.begin() + 400);
+  const std::vector<FrameOutcome> outcomes = runStream(frames, shipped("default"));
+  const Scored s = score(outcomes, 60, 2);
+  EXPECT_EQ(s.wrong, 0);
+  EXPECT_GE(s.recall, 0.68);
+  int first = 0;  // revisit frames 11-20
+  for (size_t t = 71; t <= 80; ++t)
+    first += outcomes[t].published() ? 1 : 0;
+  EXPECT_GE(first, 5);
+}
+
 // lateral_shift: Gardens Point day_left then night_right is the other side of the path at night, the scene a tenth of
 // the image or more further sideways. With places described from the centre 76 % of the image and each frame also
 // from its left and right edges, the smallest distance counting, most of its loops are found, none wrong (pace
