@@ -704,6 +704,27 @@ TEST(LoopDecision, TheReachBackPassesOverFeaturelessFrames)
   EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{2, 3}));
 }
 
+TEST(LoopDecision, ARunThatComesOutOfAStretchItCoastedThroughTakesTheStretchsFramesOnItsLine)
+{
+  // A published run (frames 2-4) coasts along its line through a featureless stretch (frames 5-8) and comes out of it
+  // passing the gates (frame 9): the stretch's frames join it, and the frames before them (published, held while
+  // the stretch left them unconfirmed). A featureless frame of a run not yet published never joins (above).
+  Config c = reliefConfig();
+  c.run_start_tolerance = 1;
+  LoopDecision decision(c);
+  const std::vector<float> reliefs = {3, 3, 3, 0.3f, 0.3f, 0.3f, 0.3f, 3, 3, 3};
+  std::vector<FrameStatus> statuses;
+  for (size_t i = 0; i < reliefs.size(); ++i)
+  {
+    statuses.push_back(decision.decide(withRelief(10 + i, reliefs[i])));
+    if (i < 9)
+      EXPECT_TRUE(decision.joinedBefore().empty() || i == 2) << i;
+  }
+  const auto P = FrameStatus::Published, I = FrameStatus::Inconsistent, F = FrameStatus::Featureless;
+  EXPECT_EQ(statuses, (std::vector<FrameStatus>{I, I, P, P, P, F, F, F, F, P}));
+  EXPECT_EQ(decision.joinedBefore(), (std::vector<size_t>{1, 2, 3, 4, 5, 6, 7, 8, 9}));
+}
+
 TEST(LoopDecision, ACoastedRunPublishesAgainOnlyFromAFrameThatPassesTheGatesItself)
 {
   // A published run coasts along its line through a featureless stretch (frames 5 to 8). After it, frames 9 and 10

@@ -216,11 +216,12 @@ private:
     while (held_.size() > kMaxHeld)
       held_.pop_front();
   }
-  /// A frame that may join a later run is held; a Featureless one is passed over (the run goes on through it,
+  /// A frame that may join a later run is held (a Featureless one where a published run coasts through it: the run
+  /// that comes out of the stretch takes it); another Featureless one is passed over (the run goes on through it,
   /// LoopDecision::joinedBefore skips it); any other ends what was held.
   void hold(const Outcome& outcome, bool may_join, uint64_t index)
   {
-    if (outcome.status == FrameStatus::Featureless)
+    if (outcome.status == FrameStatus::Featureless && !may_join)
       return;
     if (!may_join)
     {

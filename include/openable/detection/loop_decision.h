@@ -178,6 +178,7 @@ private:
   /// The frames before this one that may join, with matches within run_start_tolerance of the run's line
   /// (joinedBefore).
   /// `pace`: the best path's pace at this frame (places a frame, signed by direction).
+  /// Featureless frames are passed over, those a published run coasted through joining where they lie on its line.
   std::vector<size_t> framesOnLineBefore(double pace) const;
   /// The slope of the run's recent matches (places per frame; 0 with fewer than two).
   double runSlope() const;

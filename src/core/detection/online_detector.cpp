@@ -459,7 +459,8 @@ std::vector<FrameOutcome> OnlineDetector::decideAndConfirm(Channel channel, cons
   // and did not check it (not-unique frames are not verified: that would be every frame, nor a short map's too early
   // ones, which the decision lets join).
   const bool strict = options_.verify && (config_.verification_veto || options_.verify_required);
-  const bool unchecked = outcome.status == FrameStatus::NotUnique || outcome.status == FrameStatus::TooEarly;
+  const bool unchecked = outcome.status == FrameStatus::NotUnique || outcome.status == FrameStatus::TooEarly ||
+                         outcome.status == FrameStatus::Featureless;
   const bool may_join =
       decision.mayJoinLater() && (outcome.status == FrameStatus::Inconsistent || (unchecked && !strict));
   std::vector<FrameOutcome> confirmed =
