@@ -457,7 +457,7 @@ std::vector<FrameOutcome> OnlineDetector::decideAndConfirm(Channel channel, cons
   }
   // A frame that may join a later run: as the decision says, unless verification must accept every loop closure
   // and did not check it (not-unique frames are not verified: that would be every frame, nor a short map's too early
-  // ones, which the decision lets join).
+  // ones, nor the featureless ones a published run coasts through, which the decision lets join).
   const bool strict = options_.verify && (config_.verification_veto || options_.verify_required);
   const bool unchecked = outcome.status == FrameStatus::NotUnique || outcome.status == FrameStatus::TooEarly ||
                          outcome.status == FrameStatus::Featureless;
