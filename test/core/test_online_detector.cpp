@@ -51,6 +51,15 @@ const std::vector<cv::Mat>& gardensPointStream(const std::string& first, const s
   return frames;
 }
 
+/// A short route walked again: frames start .. start + places - 1 of `first`, then the same places of `second`.
+std::vector<cv::Mat> gardensPointRoute(const std::string& first, const std::string& second, int start, int places)
+{
+  const std::vector<cv::Mat>& whole = gardensPointStream(first, second);
+  std::vector<cv::Mat> frames(whole.begin() + start, whole.begin() + start + places);
+  frames.insert(frames.end(), whole.begin() + 200 + start, whole.begin() + 200 + start + places);
+  return frames;
+}
+
 std::vector<FrameOutcome> runStream(const std::vector<cv::Mat>& frames, const Config& config,
                                     const OnlineOptions& options = OnlineOptions(),
                                     const PinholeCamera* camera = nullptr)
@@ -229,9 +238,7 @@ TEST(OnlineDetector, AShortRouteGetsLoopsFromTheRevisitsFirstFrames)
   for (const auto& [first, second] :
        {std::pair<const char*, const char*>{"day_right", "night_right"}, {"day_left", "day_right"}})
   {
-    const auto& whole = gardensPointStream(first, second);
-    std::vector<cv::Mat> frames(whole.begin(), whole.begin() + 60);
-    frames.insert(frames.end(), whole.begin() + 200, whole.begin() + 260);
+    const std::vector<cv::Mat> frames = gardensPointRoute(first, second, 0, 60);
     const std::string stream = std::string(first) + "_" + second;
     const Scored partial = expectMoreLoopsAndNoWrongOne(frames, 60, now, before, 0.1, stream, "_short_recall",
                                                         "_short_recall_full_sequences");
@@ -264,9 +271,7 @@ TEST(OnlineDetector, ARouteShorterThanTheExclusionWindowGetsLoopsFromAShortMapsO
   for (const Route& r : {Route{"day_right", "day_left", 50, 40, 0.3}, Route{"day_right", "night_right", 100, 40, 0.3},
                          Route{"day_right", "day_left", 0, 60, 0.1}, Route{"day_left", "day_right", 0, 60, 0.1}})
   {
-    const auto& whole = gardensPointStream(r.first, r.second);
-    std::vector<cv::Mat> frames(whole.begin() + r.start, whole.begin() + r.start + r.places);
-    frames.insert(frames.end(), whole.begin() + 200 + r.start, whole.begin() + 200 + r.start + r.places);
+    const std::vector<cv::Mat> frames = gardensPointRoute(r.first, r.second, r.start, r.places);
     const std::string route = std::string(r.first) + "_" + r.second + "_" + std::to_string(r.start) + "_" +
                               std::to_string(r.places);
     expectMoreLoopsAndNoWrongOne(frames, static_cast<size_t>(r.places), with, without, r.gain, route,
@@ -285,9 +290,7 @@ TEST(OnlineDetector, ARevisitsFirstFramesTooEarlyForAShortMapJoinItsRunLate)
   for (const auto& [first, second, least] : {std::make_tuple("day_left", "day_right", 0.8),
                                              std::make_tuple("day_right", "night_right", 0.75)})
   {
-    const auto& whole = gardensPointStream(first, second);
-    std::vector<cv::Mat> frames(whole.begin(), whole.begin() + 40);
-    frames.insert(frames.end(), whole.begin() + 200, whole.begin() + 240);
+    const std::vector<cv::Mat> frames = gardensPointRoute(first, second, 0, 40);
     const std::vector<FrameOutcome> outcomes = runStream(frames, config);
     const Scored s = score(outcomes, 40, 2);
     SCOPED_TRACE(std::string(first) + " then " + second);
@@ -307,9 +310,7 @@ TEST(OnlineDetector, ARevisitsFirstFramesTooEarlyForAShortMapJoinItsRunLate)
 // (doc/results.md "A run's unique first frames").
 TEST(OnlineDetector, ARunsUniqueFirstFramesJoinItOnItsLine)
 {
-  const auto& whole = gardensPointStream("day_right", "day_left");
-  std::vector<cv::Mat> frames(whole.begin() + 140, whole.begin() + 200);
-  frames.insert(frames.end(), whole.begin() + 340, whole.begin() + 400);
+  const std::vector<cv::Mat> frames = gardensPointRoute("day_right", "day_left", 140, 60);
   const std::vector<FrameOutcome> outcomes = runStream(frames, shipped("default"));
   const Scored s = score(outcomes, 60, 2);
   EXPECT_EQ(s.wrong, 0);
@@ -487,9 +488,7 @@ TEST(OnlineDetector, APacePriorWhileSearchingFindsTheRevisitsFirstFrames)
                                             {"night_right", "day_right", 0.08}})
     expectMoreLoopsAndNoWrongOne(gardensPointStream(first, second), 200, with, without, gain,
                                  std::string(first) + "_" + second, "_recall_with_prior", "_recall_without_prior");
-  const auto& whole = gardensPointStream("day_right", "day_left");
-  std::vector<cv::Mat> frames(whole.begin(), whole.begin() + 60);
-  frames.insert(frames.end(), whole.begin() + 200, whole.begin() + 260);
+  const std::vector<cv::Mat> frames = gardensPointRoute("day_right", "day_left", 0, 60);
   Config with_long_window = with, without_long_window = without;
   with_long_window.short_map_exclusion = without_long_window.short_map_exclusion = -1;
   const Scored short_route = expectMoreLoopsAndNoWrongOne(frames, 60, with_long_window, without_long_window, 0.3,

@@ -162,8 +162,9 @@ private:
   /// Geometry may stand in for the rule the frame failed, `why`: the uniqueness gate or the minimum of places.
   bool geometryMayStandIn(const Detection& detection, FrameStatus why) const;
   /// The frame passed the gates (or geometry stood in for them): the run goes on or starts with it. Returns
-  /// Published once the run is consistent, else Inconsistent.
-  FrameStatus joinRun(const Detection& detection);
+  /// Published once the run is consistent, else Inconsistent. `leaves_coast`: the frame passed the gates itself
+  /// right after the published run coasted through a featureless stretch.
+  FrameStatus joinRun(const Detection& detection, bool leaves_coast = false);
   /// The run goes on with the frame's match where it `advances` with it (advancesWithRun), else starts again
   /// from it: its count, its line, its last match.
   void extendRun(const Detection& detection, bool advances);

@@ -302,27 +302,17 @@ FrameStatus LoopDecision::decideFrame(const Detection& detection, const Geometry
   else
   {
     const bool passes = gatesPass(detection, status) || continuesPublishedRun(detection, status);
-    const bool leaves_coast = passes && status == FrameStatus::Published && coasted_ && published_;
+    bool leaves_coast = false;
     if (passes && status == FrameStatus::Published)  // passed the gates itself, not as a continuation
     {
       unique_distance_ = detection.best.distance;
+      leaves_coast = coasted_ && published_;
       coasted_ = false;
     }
     if (resumesPublishedLine(detection, status))
       return resumeRun(detection, line_.slope);
     if (passes)
-    {
-      const FrameStatus joined = joinRun(detection);
-      // A run that coasted through a stretch of look-alike places and comes out of it passing the gates was the
-      // revisit all along: its frames in the stretch, on its line, join it now (and its last frames before the
-      // stretch, left unconfirmed by it). Counted on the pace and holdout sets' decisions.csv: of the featureless
-      // frames between two published ones, 266 and 27, every one was right (Nordland's snowfields). Measured:
-      // Nordland summer then winter 1x 0.907 -> 0.937, 2x 0.928 -> 0.972 (doc/results.md "A stretch a published run
-      // coasted through").
-      if (leaves_coast && joined == FrameStatus::Published && joined_before_.empty())
-        joined_before_ = framesOnLineBefore(detection.best.pace * detection.best.direction);
-      return joined;
-    }
+      return joinRun(detection, leaves_coast);
   }
   // Geometry may stand in for the appearance evidence this frame lacks (asked only then: it costs a RANSAC).
   if (geometry && geometryMayStandIn(detection, status) && geometry())
@@ -461,7 +451,7 @@ void LoopDecision::extendRun(const Detection& detection, bool advances)
   previous_session_ = detection.best.session;
 }
 
-FrameStatus LoopDecision::joinRun(const Detection& detection)
+FrameStatus LoopDecision::joinRun(const Detection& detection, bool leaves_coast)
 {
   // A catch-up takes two frames: the jump ahead (catchesUp, judged against the run as it was), then the next frame on
   // the faster path's line. A jump for one frame is a look-alike place further on, not a lag made up (GP day_left
@@ -488,6 +478,16 @@ FrameStatus LoopDecision::joinRun(const Detection& detection)
     // has had its first frames too_early or excluded while the path settled.
     if (detection.short_map && !line_.valid)
       frames_since_search_kept_ = 0;
+  }
+  else if (published_ && leaves_coast)
+  {
+    // A run that coasted through a stretch of look-alike places and comes out of it passing the gates was the
+    // revisit all along: its frames in the stretch, on its line, join it now (and its last frames before the
+    // stretch, left unconfirmed by it). Counted on the pace and holdout sets' decisions.csv: of the featureless
+    // frames between two published ones, 266 and 27, every one was right (Nordland's snowfields). Measured:
+    // Nordland summer then winter 1x 0.907 -> 0.937, 2x 0.928 -> 0.972 (doc/results.md "A stretch a published run
+    // coasted through").
+    joined_before_ = framesOnLineBefore(detection.best.pace * detection.best.direction);
   }
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
 }
