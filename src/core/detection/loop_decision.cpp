@@ -469,26 +469,20 @@ FrameStatus LoopDecision::joinRun(const Detection& detection, bool leaves_coast)
     frames_since_search_kept_ = 0;
     return resumeRun(detection, detection.best.pace * detection.best.direction);
   }
-  if (published_ && !was_published)
-  {
+  // The run reaches back where it is published from this frame on: its first frames, and the frames before them on
+  // its line; or where it comes out of a stretch of look-alike places it coasted through, passing the gates: it was
+  // the revisit all along, and its frames in the stretch, on its line, join it now (and its last frames before the
+  // stretch, left unconfirmed by it). Counted on the pace and holdout sets' decisions.csv: of the featureless frames
+  // between two published ones, 266 and 27, every one was right (Nordland's snowfields). Measured: Nordland summer
+  // then winter 1x 0.907 -> 0.937, 2x 0.928 -> 0.972 (doc/results.md "A stretch a published run coasted through").
+  if (published_ && (!was_published || leaves_coast))
     joined_before_ = framesOnLineBefore(detection.best.pace * detection.best.direction);
-    // A revisit of a short route begins: within exclusion_window frames of the first pass its first frames fit any
-    // pace, and the pace prior, off at once, let a slower path take the run 2 to 4 places behind (GP day_left then
-    // day_right 0-59, revisit frames 70-79, 10 wrong loops at a window of 30, doc/results.md). A long map's revisit
-    // has had its first frames too_early or excluded while the path settled.
-    if (detection.short_map && !line_.valid)
-      frames_since_search_kept_ = 0;
-  }
-  else if (published_ && leaves_coast)
-  {
-    // A run that coasted through a stretch of look-alike places and comes out of it passing the gates was the
-    // revisit all along: its frames in the stretch, on its line, join it now (and its last frames before the
-    // stretch, left unconfirmed by it). Counted on the pace and holdout sets' decisions.csv: of the featureless
-    // frames between two published ones, 266 and 27, every one was right (Nordland's snowfields). Measured:
-    // Nordland summer then winter 1x 0.907 -> 0.937, 2x 0.928 -> 0.972 (doc/results.md "A stretch a published run
-    // coasted through").
-    joined_before_ = framesOnLineBefore(detection.best.pace * detection.best.direction);
-  }
+  // A revisit of a short route begins: within exclusion_window frames of the first pass its first frames fit any
+  // pace, and the pace prior, off at once, let a slower path take the run 2 to 4 places behind (GP day_left then
+  // day_right 0-59, revisit frames 70-79, 10 wrong loops at a window of 30, doc/results.md). A long map's revisit
+  // has had its first frames too_early or excluded while the path settled.
+  if (published_ && !was_published && detection.short_map && !line_.valid)
+    frames_since_search_kept_ = 0;
   return published_ ? FrameStatus::Published : FrameStatus::Inconsistent;
 }
 
