@@ -17,6 +17,11 @@ SET is one of
            1000-1099 both ways; at 1x, 2x, 0.5x, stops:30 and 1.5x
   route40  120 routes of 40 places (a corridor walked twice): GP frames 0-39, 50-89, 100-139 and 150-189 of the
            five pairings, Nordland frames 300-339 and 1000-1039 both ways; at the profiles of `short`
+  slow     48 revisits slower than the first pass with frames of their own (not repeated ones, which a standstill
+           removes): the first traversal at 1.5x, 2x and 3x (its map sparser), the second at 1x and 1.25x; GP
+           day_right then night_right, day_right then day_left, day_left then day_right, night_right then
+           day_right, day_left then night_right (default.yaml), day_right then night_right (gardens_point.yaml),
+           Nordland summer then winter and winter then summer (nordland.yaml)
 (scripts/pace_sweep.py has one more, every steady pace from 1.0x to 2.9x.) Prints one line per stream and profile,
 then the totals: published / wrong / summed recall. --json writes {"stream profile": [published, wrong, recall]}, so
 two runs can be compared stream by stream. Each stream's runs stay in DIR (a Nordland run's distance matrix alone is
@@ -36,10 +41,12 @@ NL = os.path.join(DATA, 'nordland')
 PACE = '1x 2x 0.5x stops:100 1.25x 2.5x ramp:0.5,2 varying:100 random:1'.split()
 HOLDOUT = '1x 1.5x 0.7x stops:60 varying:150 random:2 random:3'.split()
 SHORT = '1x 2x 0.5x stops:30 1.5x'.split()
+SLOW = '1x 1.25x'.split()
+SLOW_FIRST = '1.5x 2x 3x'.split()
 
 
 def streams(which):
-    """(name, first, second, tolerance, config, start, frames, profiles)."""
+    """(name, first, second, tolerance, config, start, frames, profiles[, first_profile])."""
     gp = lambda a, b: (os.path.join(GP, a), os.path.join(GP, b), 2)
     nl = lambda a, b: (os.path.join(NL, a), os.path.join(NL, b), 1)
     if which == 'pace':
@@ -61,6 +68,16 @@ def streams(which):
                 ('gp_dr_nr_nl', gp('day_right', 'night_right'), 'nordland'),
                 ('nl_s_w_gp', nl('summer', 'winter'), 'gardens_point')]
         return [(n, *pair, cfg, 0, 0, HOLDOUT) for n, pair, cfg in rows]
+    if which == 'slow':
+        rows = [('gp_dr_nr_def', gp('day_right', 'night_right'), 'default'),
+                ('gp_dr_dl_def', gp('day_right', 'day_left'), 'default'),
+                ('gp_dl_dr_def', gp('day_left', 'day_right'), 'default'),
+                ('gp_nr_dr_def', gp('night_right', 'day_right'), 'default'),
+                ('gp_dl_nr_def', gp('day_left', 'night_right'), 'default'),
+                ('gp_dr_nr_gp', gp('day_right', 'night_right'), 'gardens_point'),
+                ('nl_s_w_nl', nl('summer', 'winter'), 'nordland'),
+                ('nl_w_s_nl', nl('winter', 'summer'), 'nordland')]
+        return [('%s_first%s' % (n, fp), *pair, cfg, 0, 0, SLOW, fp) for n, pair, cfg in rows for fp in SLOW_FIRST]
     # Short routes: the same pairings, each from several starts; 'route40' takes 40 places of each, 'short' 60 of
     # Gardens Point and 100 of Nordland (a frame every 10 s there).
     gp_starts, gp_frames, nl_frames = ((0, 50, 100, 150), 40, 40) if which == 'route40' else ((0, 100, 140), 60, 100)
@@ -92,7 +109,7 @@ def report(label, results, json_path=''):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('which', choices=['pace', 'holdout', 'short', 'route40'])
+    parser.add_argument('which', choices=['pace', 'holdout', 'short', 'route40', 'slow'])
     parser.add_argument('--out', required=True)
     parser.add_argument('--bin', default=os.path.join(HERE, '..', 'build', 'ws', 'devel', 'lib', 'openable_ros'))
     parser.add_argument('--set', action='append', default=[])
@@ -101,11 +118,11 @@ def main():
     parser.add_argument('--clean', action='store_true', help="remove each stream's runs once scored")
     args = parser.parse_args()
     results = {}
-    for name, first, second, tolerance, config, start, frames, profiles in streams(args.which):
+    for name, first, second, tolerance, config, start, frames, profiles, *first_profile in streams(args.which):
         config_file = os.path.join(HERE, '..', 'config', config + '.yaml')
         for profile, published, wrong, recall in pace_eval.evaluate(
                 first, second, tolerance, config_file, os.path.join(args.out, name), profiles, args.bin, args.jobs,
-                args.set, start=start, frames=frames):
+                args.set, first_profile=(first_profile or ['1x'])[0], start=start, frames=frames):
             key = '%s %s' % (name, profile)
             results[key] = [published, wrong, recall]
             print_row(key, published, wrong, recall)
