@@ -46,7 +46,7 @@ SLOW_FIRST = '1.5x 2x 3x'.split()
 
 
 def streams(which):
-    """(name, first, second, tolerance, config, start, frames, profiles[, first_profile])."""
+    """(name, first, second, tolerance, config, start, frames, profiles, first_profile)."""
     gp = lambda a, b: (os.path.join(GP, a), os.path.join(GP, b), 2)
     nl = lambda a, b: (os.path.join(NL, a), os.path.join(NL, b), 1)
     if which == 'pace':
@@ -60,14 +60,14 @@ def streams(which):
                 ('gp_dr_dl_gp', gp('day_right', 'day_left'), 'gardens_point', 0, 0),
                 ('gp_short_dr_dl', gp('day_right', 'day_left'), 'default', 0, 60),
                 ('gp_short_dr_nr', gp('day_right', 'night_right'), 'default', 0, 60)]
-        return [(n, *pair, cfg, start, frames, PACE) for n, pair, cfg, start, frames in rows]
+        return [(n, *pair, cfg, start, frames, PACE, '1x') for n, pair, cfg, start, frames in rows]
     if which == 'holdout':
         rows = [('gp_dl_dr_def', gp('day_left', 'day_right'), 'default'),
                 ('gp_nr_dr_def', gp('night_right', 'day_right'), 'default'),
                 ('gp_dl_nr_gp', gp('day_left', 'night_right'), 'gardens_point'),
                 ('gp_dr_nr_nl', gp('day_right', 'night_right'), 'nordland'),
                 ('nl_s_w_gp', nl('summer', 'winter'), 'gardens_point')]
-        return [(n, *pair, cfg, 0, 0, HOLDOUT) for n, pair, cfg in rows]
+        return [(n, *pair, cfg, 0, 0, HOLDOUT, '1x') for n, pair, cfg in rows]
     if which == 'slow':
         rows = [('gp_dr_nr_def', gp('day_right', 'night_right'), 'default'),
                 ('gp_dr_dl_def', gp('day_right', 'day_left'), 'default'),
@@ -85,10 +85,10 @@ def streams(which):
     for a, b in (('day_right', 'day_left'), ('day_left', 'day_right'), ('day_right', 'night_right'),
                  ('night_right', 'day_right'), ('day_left', 'night_right')):
         for start in gp_starts:
-            out.append(('%s_%s_%s_%d' % (which, a, b, start), *gp(a, b), 'default', start, gp_frames, SHORT))
+            out.append(('%s_%s_%s_%d' % (which, a, b, start), *gp(a, b), 'default', start, gp_frames, SHORT, '1x'))
     for a, b in (('summer', 'winter'), ('winter', 'summer')):
         for start in (300, 1000):
-            out.append(('%s_%s_%s_%d' % (which, a, b, start), *nl(a, b), 'default', start, nl_frames, SHORT))
+            out.append(('%s_%s_%s_%d' % (which, a, b, start), *nl(a, b), 'default', start, nl_frames, SHORT, '1x'))
     return out
 
 
@@ -118,11 +118,11 @@ def main():
     parser.add_argument('--clean', action='store_true', help="remove each stream's runs once scored")
     args = parser.parse_args()
     results = {}
-    for name, first, second, tolerance, config, start, frames, profiles, *first_profile in streams(args.which):
+    for name, first, second, tolerance, config, start, frames, profiles, first_profile in streams(args.which):
         config_file = os.path.join(HERE, '..', 'config', config + '.yaml')
         for profile, published, wrong, recall in pace_eval.evaluate(
                 first, second, tolerance, config_file, os.path.join(args.out, name), profiles, args.bin, args.jobs,
-                args.set, first_profile=(first_profile or ['1x'])[0], start=start, frames=frames):
+                args.set, first_profile=first_profile, start=start, frames=frames):
             key = '%s %s' % (name, profile)
             results[key] = [published, wrong, recall]
             print_row(key, published, wrong, recall)
